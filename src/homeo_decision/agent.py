@@ -1,0 +1,118 @@
+"""The decision maker: perception -> dominant motivation -> softmax choice -> learning.
+
+This is Algorithm 1 of the thesis as a ROS-free object. The runner (or a node) gives it
+the drives and the perceived world each tick; it answers with an action and learns
+from the outcome.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+from .motivation import dod_weights, dominant, intensities
+from .objectq import ObjectQ, phase_at, schedule_from
+from .reward import drive_reward, pseudo_drives, reward
+from .rng import UniformStream
+from .scenario import Scenario
+
+
+@dataclass(slots=True)
+class Percept:
+    """What the robot knows at decision time (the state s of Algorithm 1)."""
+
+    code: int  # perceived world (recognised intention, relation, object states)
+    drives: tuple  # drive values
+    intensities: list  # Eq 3.2
+    m_dom: int  # Eq 3.3
+    states: tuple  # reduced state per object, Eq 3.11
+
+
+@dataclass(slots=True)
+class Learned:
+    reward: float
+    pseudo_reward: float | None  # r+_drives + f of Eq 3.23 when a pseudo update ran
+
+
+class DecisionCore:
+    """Object Q-learning with motivation factor, DoD weights and pseudo updates."""
+
+    def __init__(self, sc: Scenario, seed: int = 0, *, dod: float | None = None, xi: float | None = None,
+                 gamma: float | None = None, pseudo_update: bool | None = None, feedback_value: float | None = None,
+                 feedback: bool = True):
+        self.sc = sc
+        L = sc.learning
+        self.thresholds = [d.threshold for d in sc.drives]
+        self.tie_break = sc.open["tie_break"]
+        self.schedule = schedule_from(L)
+        self.q = ObjectQ(sc)
+        self.stim = sc.c.stim
+        self.valid = sc.c.valid
+        self.serving = sc.serving
+        self.praise = sc.praise_change
+        self.set_params(dod=L["dod"] if dod is None else dod, xi=L["xi"] if xi is None else xi,
+                        gamma=L["gamma"] if gamma is None else gamma,
+                        pseudo_update=L["pseudo_update"] if pseudo_update is None else pseudo_update,
+                        feedback_value=sc.feedback_value if feedback_value is None else feedback_value,
+                        feedback=feedback)
+        self.reseed(seed)
+
+    def set_params(self, *, dod=None, xi=None, gamma=None, pseudo_update=None, feedback_value=None, feedback=None) -> None:
+        """Change tunables between ticks (the node's live parameters)."""
+        if dod is not None:
+            self.dod = float(dod)
+            self.weights = dod_weights(self.dod, len(self.sc.drives), self.serving)
+        if xi is not None:
+            if xi < 0:
+                raise ValueError(f"xi must be >= 0, got {xi}")
+            self.xi = float(xi)
+        if gamma is not None:
+            if not 0.0 <= gamma <= 1.0:
+                raise ValueError(f"gamma must be in [0, 1], got {gamma}")
+            self.gamma = float(gamma)
+        if pseudo_update is not None:
+            self.pseudo = bool(pseudo_update)
+        if feedback_value is not None:
+            if feedback_value < 0:
+                raise ValueError(f"feedback value must be >= 0, got {feedback_value}")
+            self.f = float(feedback_value)
+        if feedback is not None:
+            self.use_feedback = bool(feedback)
+
+    def reseed(self, seed: int) -> None:
+        self.seed = int(seed)
+        self.rng = UniformStream(self.seed, "decision")
+
+    def reset(self, seed: int | None = None) -> None:
+        self.q.reset()
+        self.reseed(self.seed if seed is None else seed)
+
+    # -- Algorithm 1 -----------------------------------------------------------
+    def perceive(self, drives: Sequence[float], code: int) -> Percept:
+        """Lines 2-10: stimuli, intensities, m_dom and the reduced states."""
+        inten = intensities(drives, self.thresholds, self.stim[code])
+        m = dominant(inten, self.tie_break)
+        return Percept(code, tuple(drives), inten, m, self.q.states(m, code))
+
+    def select(self, p: Percept, t: int) -> int:
+        """Lines 11-17: softmax (Eq 3.17) over the valid actions, at the temperature of tick t."""
+        tau = phase_at(self.schedule, t).tau
+        return self.q.select(p.states, self.valid[p.code], tau, self.rng.random())
+
+    def learn(self, p: Percept, action: int, after: Sequence[float], feedback: int, proposal: int | None,
+              p_next: Percept, t: int) -> Learned:
+        """Lines 19-24: the Object-Q update (Eq 3.14) and, for a proposal, the pseudo update (Eq 3.23)."""
+        alpha = phase_at(self.schedule, t).alpha
+        fb = feedback if self.use_feedback else 0
+        r = reward(p.drives, after, self.weights, p.m_dom, self.xi, fb, self.f)
+        self.q.update(action, p.states, r, p_next.states, alpha, self.gamma, p.code, p_next.code)
+        r_dag = None
+        if self.pseudo and self.use_feedback and proposal is not None and proposal != action:
+            d_dag = pseudo_drives(p.drives, self.serving, self.praise)
+            r_dag = drive_reward(p.drives, d_dag, self.weights, p.m_dom, self.xi)
+            # s+ differs from s only in m_dom, from the pseudo drives and unchanged stimuli
+            m_dag = dominant(intensities(d_dag, self.thresholds, self.stim[p.code]), self.tie_break)
+            s_dag = self.q.states(m_dag, p.code)
+            self.q.pseudo_update(proposal, p.states, r_dag, self.f, s_dag, alpha, self.gamma, p.code)
+            r_dag += self.f
+        return Learned(r, r_dag)

@@ -1,0 +1,80 @@
+"""Drive dynamics: time increase (Table 4.2), action effects (Table 4.1), feedback.
+
+The robot computes its *internal* drives (NAch, NSoc) itself; *body* drives (NRes,
+NEng) are read from the body: the simulated one in ``homeo_sim.body`` or Pepper's
+sensors. Both apply the same scenario rules to their own subset of drives.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+from .motivation import clamp
+from .scenario import Scenario
+
+
+class DriveDynamics:
+    """Rates and action effects of the scenario, applied to a subset of the drives."""
+
+    def __init__(self, sc: Scenario, source: str):
+        self.sc = sc
+        self.idx = tuple(i for i, d in enumerate(sc.drives) if d.source == source)
+        self.rates = [d.rate for d in sc.drives]
+        self.delta = sc.c.drive_delta
+        self.values = [0.0] * len(sc.drives)
+        self.reset()
+
+    def reset(self, initial: Sequence[float] | None = None) -> None:
+        init = self.sc.open["initial_drives"] if initial is None else initial
+        for i in self.idx:
+            self.values[i] = clamp(float(init[i]))
+
+    def apply_action(self, code: int, action: int) -> None:
+        """Table 4.1: the drive effects of ``action`` taken in world ``code``."""
+        d = self.delta[code][action]
+        v = self.values
+        for i in self.idx:
+            if d[i]:
+                v[i] = clamp(v[i] + d[i])
+
+    def apply_time(self, skip: int = -1) -> None:
+        """Table 4.2: every drive of the subset grows by its rate (``skip`` one of them)."""
+        v, r = self.values, self.rates
+        for i in self.idx:
+            if i != skip:
+                v[i] = clamp(v[i] + r[i])
+
+
+class DriveModel(DriveDynamics):
+    """The robot's drives: internal ones computed here, body ones copied from readings."""
+
+    def __init__(self, sc: Scenario):
+        super().__init__(sc, "internal")
+        self.body_idx = tuple(i for i, d in enumerate(sc.drives) if d.source == "body")
+        self.thresholds = [d.threshold for d in sc.drives]
+        self.serving = sc.serving
+        self.serving_internal = sc.drives[sc.serving].source == "internal"
+        self.praise = sc.praise_change
+        self.scold = sc.open["scold_drive_change"]
+        self.growth = sc.open["nach_growth"]
+        init = sc.open["initial_drives"]
+        for i in self.body_idx:
+            self.values[i] = clamp(float(init[i]))
+
+    def set_body(self, body_values: Sequence[float]) -> None:
+        """Copy the body drives (indexed like all drives) from a body reading."""
+        for i in self.body_idx:
+            self.values[i] = clamp(float(body_values[i]))
+
+    def apply_feedback(self, feedback: int) -> None:
+        """Positive feedback lowers the serving drive by 10 (Section 4.2.1); a scolding moves it by an open amount."""
+        if not self.serving_internal or feedback == 0:
+            return
+        s = self.serving
+        self.values[s] = clamp(self.values[s] + (self.praise if feedback > 0 else self.scold))
+
+    def apply_time(self, expressed: bool = True, satisfied: bool = False) -> None:  # type: ignore[override]
+        """Table 4.2 growth; whether the serving drive grows on a tick is the open choice ``nach_growth``."""
+        g = self.growth
+        grow_serving = g == "always" or (g == "expressed" and expressed) or (g == "unsatisfied" and expressed and not satisfied)
+        super().apply_time(skip=-1 if grow_serving else self.serving)

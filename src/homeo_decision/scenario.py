@@ -1,0 +1,660 @@
+"""The scenario file: drives, objects, actions, constraints, effects, stimuli, intentions.
+
+A scenario is data (JSON), validated on load and *compiled* into flat lookup tables so
+that the per-tick work is a handful of list indexings. Every world the scenario can be
+in is a small integer, the *world code*: a mixed-radix number over the base variables
+(robot location, human presence, intention, each object variable). Derived variables
+(an object's or the human's distance to the robot) are computed from the base ones.
+
+Conditions (`requires`, `when`, `reasonable`) are ``{variable: [values]}``; a value
+written ``"!x"`` means "anything but x". All listed variables must hold (AND).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+SCHEMA = "homeo-scenario"
+SCHEMA_VERSION = 1
+NONE_INTENTION = "none"
+NULL_OBJECT = "null"
+PRESENCE = ("present", "absent")
+RELATIONS = ("near", "far", "absent")
+DISTANCES = ("near", "far")
+
+# Choices the thesis leaves open, with their defaults and allowed values (None = any
+# number in the given range). docs/FIDELITY.md explains each.
+OPEN_CHOICES: dict[str, tuple[Any, Any]] = {
+    "initial_q": (0.0, (-1e6, 1e6)),
+    "scold_drive_change": (0.0, (-100.0, 100.0)),
+    "nach_growth": ("always", ("always", "expressed", "unsatisfied")),
+    "reward_span": ("iteration", ("iteration", "action")),
+    "leaving_charger_detaches": (True, (True, False)),
+    "tie_break": ("first", ("first", "last")),
+    "value_max_over": ("all", ("all", "valid")),
+    "human_no_intention_prob": (0.0, (0.0, 1.0)),
+    "human_leave_prob": (0.0, (0.0, 1.0)),
+    "human_return_prob": (1.0, (0.0, 1.0)),
+    "human_leave_proposal": ("first", ("first", "MoveToR", "MoveToC", "random")),
+    "human_proposal_prob": (1.0, (0.0, 1.0)),
+}
+
+
+class ScenarioError(ValueError):
+    """A scenario file that cannot be used; the message says where and why."""
+
+
+@dataclass(frozen=True)
+class DriveSpec:
+    name: str
+    motivation: str
+    threshold: float
+    rate: float
+    source: str  # "internal" (computed by the robot) or "body" (read from the body)
+
+
+@dataclass(frozen=True)
+class ActionSpec:
+    name: str
+    obj: str
+    requires: dict
+    effects: tuple  # of dicts: {"when": cond, "set": {...}, "drives": {...}}
+
+
+@dataclass(frozen=True)
+class IntentionSpec:
+    name: str
+    desired: tuple
+    reasonable: dict
+
+
+@dataclass
+class Scenario:
+    """A validated scenario plus its compiled tables (see module docstring)."""
+
+    name: str
+    raw: dict
+    drives: tuple
+    serving: int
+    locations: tuple
+    human_location: str
+    resting_place: str
+    objects: dict  # name -> {"location": str|None, "variables": {var: [values]}, "on_leave": {...}}
+    stimuli: tuple
+    actions: tuple
+    intentions: tuple
+    feedback_value: float
+    praise_change: float
+    learning: dict
+    open: dict
+    source: str = "<memory>"
+    # compiled
+    base_vars: tuple = ()
+    base_values: tuple = ()
+    n_codes: int = 0
+    c: "Compiled" = field(default=None, repr=False)  # type: ignore[assignment]
+
+    # -- names ---------------------------------------------------------------
+    @property
+    def drive_names(self) -> list[str]:
+        return [d.name for d in self.drives]
+
+    @property
+    def motivation_names(self) -> list[str]:
+        return [d.motivation for d in self.drives]
+
+    @property
+    def action_names(self) -> list[str]:
+        return [a.name for a in self.actions]
+
+    @property
+    def intention_names(self) -> list[str]:
+        """Intentions as the robot perceives them: ``none`` first."""
+        return [NONE_INTENTION] + [i.name for i in self.intentions]
+
+    @property
+    def object_names(self) -> list[str]:
+        """Objects with a Q-table, the ``null`` object last (Eq 3.12)."""
+        return list(self.objects) + [NULL_OBJECT]
+
+    def action_index(self, name: str) -> int:
+        try:
+            return self.c.action_ids[name]
+        except KeyError:
+            raise ScenarioError(f"unknown action {name!r}; known: {', '.join(self.action_names)}") from None
+
+    def fingerprint(self) -> str:
+        """Hash of what a Q-table depends on (drives, intentions, objects' states/actions)."""
+        blob = json.dumps(self.q_layout(), sort_keys=True).encode()
+        return hashlib.sha256(blob).hexdigest()[:16]
+
+    def q_layout(self) -> dict:
+        """Labels of every Q-table axis: what a saved table must agree with."""
+        c = self.c
+        return {
+            "motivations": self.motivation_names,
+            "intentions": self.intention_names,
+            "relations": list(RELATIONS),
+            "objects": {
+                o: {"states": list(c.obj_state_labels[k]), "actions": [self.actions[a].name for a in c.obj_actions[k]]}
+                for k, o in enumerate(self.object_names)
+            },
+        }
+
+    # -- observations --------------------------------------------------------
+    def encode(self, values: Mapping[str, str]) -> int:
+        """World code of a full assignment of the base variables."""
+        code = 0
+        for var, vals in zip(self.base_vars, self.base_values):
+            v = values.get(var)
+            if v not in vals:
+                raise ScenarioError(f"{var} = {v!r} is not one of {list(vals)}")
+            code = code * len(vals) + vals.index(v)
+        return code
+
+    def decode(self, code: int) -> dict[str, str]:
+        out = {}
+        for var, vals in reversed(list(zip(self.base_vars, self.base_values))):
+            code, r = divmod(code, len(vals))
+            out[var] = vals[r]
+        return dict(reversed(list(out.items())))
+
+    def view(self, code: int) -> dict[str, str]:
+        """Base and derived variables of a world code."""
+        return dict(self.c.views[code])
+
+
+@dataclass
+class Compiled:
+    """Lookup tables indexed by world code (and action / object index)."""
+
+    action_ids: dict
+    views: list  # code -> dict of all variables
+    stim: list  # code -> tuple of per-motivation stimulus sums (Eq 3.2)
+    stim_names: list  # code -> tuple of present stimulus names
+    valid: list  # code -> tuple of valid action ids (Table 3.3 constraints)
+    valid_local: list  # code -> tuple per object of valid local action indices
+    next_code: list  # code -> tuple per action of the world code after its effects
+    drive_delta: list  # code -> tuple per action of tuple per drive of the change (Table 4.1)
+    hum: list  # code -> index of S_hum = intention x relation (Eq 3.9)
+    obj_state: list  # code -> tuple per object of its state index (Eq 3.24-3.26)
+    obj_state_labels: list  # object -> tuple of state labels
+    obj_actions: list  # object -> tuple of action ids (A_o)
+    act_obj: tuple  # action -> object index
+    act_local: tuple  # action -> index within A_o
+    intention_of: list  # code -> intention index (0 = none)
+    relation_of: list  # code -> relation index
+    location_of: list  # code -> location index
+    presence_of: list  # code -> 0 present / 1 absent
+    with_intention: list  # code -> tuple per intention index of the code with that intention
+    with_presence: list  # code -> tuple per presence index
+    reasonable: list  # code -> tuple of intention indices reasonable there (human side)
+    desired: tuple  # intention index -> frozenset of action ids
+    n_hum: int
+
+
+# ---------------------------------------------------------------------------
+# loading and validation
+
+
+def load_scenario(path: str | Path | None = None, overrides: Mapping[str, Any] | None = None) -> Scenario:
+    """Load, validate and compile a scenario file (the thesis scenario by default)."""
+    if path is None:
+        from homeo_sim.scenarios import default_scenario_path
+
+        path = default_scenario_path()
+    p = Path(path)
+    try:
+        text = p.read_text()
+    except FileNotFoundError:
+        raise ScenarioError(f"scenario file not found: {p}") from None
+    except OSError as exc:
+        raise ScenarioError(f"cannot read scenario file {p}: {exc.strerror}") from None
+    try:
+        raw = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise ScenarioError(f"{p}: not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})") from None
+    return scenario_from_dict(raw, source=str(p), overrides=overrides)
+
+
+def scenario_from_dict(raw: Any, source: str = "<memory>", overrides: Mapping[str, Any] | None = None) -> Scenario:
+    where = source
+    if not isinstance(raw, dict):
+        raise ScenarioError(f"{where}: a scenario must be a JSON object")
+    if raw.get("schema") != SCHEMA:
+        raise ScenarioError(f"{where}: 'schema' must be {SCHEMA!r}")
+    if raw.get("version") != SCHEMA_VERSION:
+        raise ScenarioError(f"{where}: unsupported scenario version {raw.get('version')!r} (this program reads {SCHEMA_VERSION})")
+
+    def need(obj, key, typ, ctx):
+        if key not in obj:
+            raise ScenarioError(f"{where}: {ctx} is missing {key!r}")
+        val = obj[key]
+        if not isinstance(val, typ) or isinstance(val, bool) and typ is not bool:
+            raise ScenarioError(f"{where}: {ctx}.{key} has the wrong type ({type(val).__name__})")
+        return val
+
+    # drives
+    drives = []
+    for i, d in enumerate(need(raw, "drives", list, "scenario")):
+        ctx = f"drives[{i}]"
+        if not isinstance(d, dict):
+            raise ScenarioError(f"{where}: {ctx} must be an object")
+        name = need(d, "name", str, ctx)
+        thr = float(need(d, "threshold", (int, float), ctx))
+        rate = float(need(d, "rate", (int, float), ctx))
+        if not 0 <= thr <= 100:
+            raise ScenarioError(f"{where}: {ctx} ({name}) threshold {thr} is outside [0, 100]")
+        src = d.get("source", "internal")
+        if src not in ("internal", "body"):
+            raise ScenarioError(f"{where}: {ctx} ({name}) source must be 'internal' or 'body'")
+        drives.append(DriveSpec(name, need(d, "motivation", str, ctx), thr, rate, src))
+    if not drives:
+        raise ScenarioError(f"{where}: a scenario needs at least one drive")
+    _unique([d.name for d in drives], "drive", where)
+    _unique([d.motivation for d in drives], "motivation", where)
+    dnames = [d.name for d in drives]
+    motiv = [d.motivation for d in drives]
+    serving_name = raw.get("serving_drive", dnames[0])
+    if serving_name not in dnames:
+        raise ScenarioError(f"{where}: serving_drive {serving_name!r} is not a declared drive")
+
+    locations = tuple(need(raw, "locations", list, "scenario"))
+    _unique(locations, "location", where)
+    human = need(raw, "human", dict, "scenario")
+    hloc = need(human, "location", str, "human")
+    if hloc not in locations:
+        raise ScenarioError(f"{where}: human.location {hloc!r} is not one of the locations {list(locations)}")
+    rest = raw.get("resting_place")
+    if rest is not None and rest not in locations:
+        raise ScenarioError(f"{where}: resting_place {rest!r} is not one of the locations")
+
+    objects: dict[str, dict] = {}
+    for oname, o in need(raw, "objects", dict, "scenario").items():
+        ctx = f"objects.{oname}"
+        if oname in (NULL_OBJECT, "human", "robot", "intention"):
+            raise ScenarioError(f"{where}: {ctx}: {oname!r} is a reserved name")
+        if not isinstance(o, dict):
+            raise ScenarioError(f"{where}: {ctx} must be an object")
+        loc = o.get("location")
+        if loc is not None and loc not in locations:
+            raise ScenarioError(f"{where}: {ctx}.location {loc!r} is not one of the locations")
+        variables = o.get("variables", {})
+        if not isinstance(variables, dict):
+            raise ScenarioError(f"{where}: {ctx}.variables must be an object")
+        for var, vals in variables.items():
+            if var == "distance":
+                raise ScenarioError(f"{where}: {ctx}: 'distance' is derived from the location, do not declare it")
+            if not isinstance(vals, list) or len(vals) < 1 or not all(isinstance(v, str) for v in vals):
+                raise ScenarioError(f"{where}: {ctx}.variables.{var} must be a non-empty list of names")
+            _unique(vals, f"value of {oname}.{var}", where)
+        if loc is None and not variables:
+            raise ScenarioError(f"{where}: {ctx} has neither a location nor variables: it has no state")
+        on_leave = o.get("on_leave", {})
+        for var, val in on_leave.items():
+            if var not in variables or val not in variables[var]:
+                raise ScenarioError(f"{where}: {ctx}.on_leave sets {var}={val!r}, not a value of that object")
+        objects[oname] = {"location": loc, "variables": {k: list(v) for k, v in variables.items()}, "on_leave": dict(on_leave)}
+
+    intentions = []
+    for i, it in enumerate(need(raw, "intentions", list, "scenario")):
+        ctx = f"intentions[{i}]"
+        name = need(it, "name", str, ctx)
+        if name == NONE_INTENTION:
+            raise ScenarioError(f"{where}: {ctx}: 'none' is reserved for 'no intention'")
+        desired = need(it, "desired", list, ctx)
+        if not desired:
+            raise ScenarioError(f"{where}: {ctx} ({name}) needs at least one desired action")
+        intentions.append(IntentionSpec(name, tuple(desired), dict(it.get("reasonable", {}))))
+    _unique([i.name for i in intentions], "intention", where)
+
+    # variables (needed to validate conditions)
+    base_vars = ["robot.location", "human.presence", "intention"]
+    base_values = [list(locations), list(PRESENCE), [NONE_INTENTION] + [i.name for i in intentions]]
+    for oname, o in objects.items():
+        for var, vals in o["variables"].items():
+            base_vars.append(f"{oname}.{var}")
+            base_values.append(list(vals))
+    derived = {"human.relation": list(RELATIONS)}
+    for oname, o in objects.items():
+        if o["location"] is not None:
+            derived[f"{oname}.distance"] = list(DISTANCES)
+    all_vars = dict(zip(base_vars, base_values)) | derived
+
+    def check_cond(cond, ctx):
+        if not isinstance(cond, dict):
+            raise ScenarioError(f"{where}: {ctx} must be an object of variable: [values]")
+        for var, vals in cond.items():
+            if var not in all_vars:
+                raise ScenarioError(f"{where}: {ctx} refers to unknown variable {var!r}; known: {', '.join(sorted(all_vars))}")
+            if not isinstance(vals, list) or not vals:
+                raise ScenarioError(f"{where}: {ctx}.{var} must be a non-empty list of values")
+            for v in vals:
+                bare = v[1:] if isinstance(v, str) and v.startswith("!") else v
+                if bare not in all_vars[var]:
+                    raise ScenarioError(f"{where}: {ctx}: {var} has no value {bare!r}; values: {all_vars[var]}")
+
+    def check_set(st, ctx):
+        for var, val in st.items():
+            if var not in base_vars or var in ("human.presence", "intention"):
+                raise ScenarioError(f"{where}: {ctx} sets {var!r}, which an action cannot set")
+            if val not in all_vars[var]:
+                raise ScenarioError(f"{where}: {ctx} sets {var} to {val!r}; values: {all_vars[var]}")
+
+    stimuli = []
+    for i, st in enumerate(need(raw, "stimuli", list, "scenario")):
+        ctx = f"stimuli[{i}]"
+        check_cond(need(st, "when", dict, ctx), ctx + ".when")
+        eff = need(st, "effects", dict, ctx)
+        for m, v in eff.items():
+            if m not in motiv:
+                raise ScenarioError(f"{where}: {ctx} affects unknown motivation {m!r}; known: {motiv}")
+            if not isinstance(v, (int, float)) or isinstance(v, bool):
+                raise ScenarioError(f"{where}: {ctx}.effects.{m} must be a number")
+        stimuli.append({"name": st.get("name", f"stimulus{i}"), "when": st["when"], "effects": dict(eff)})
+
+    actions = []
+    obj_names = list(objects) + [NULL_OBJECT]
+    for i, a in enumerate(need(raw, "actions", list, "scenario")):
+        ctx = f"actions[{i}]"
+        name = need(a, "name", str, ctx)
+        ctx = f"action {name!r}"
+        obj = need(a, "object", str, ctx)
+        if obj not in obj_names:
+            raise ScenarioError(f"{where}: {ctx} targets unknown object {obj!r}; objects: {', '.join(obj_names)}")
+        req = a.get("requires", {})
+        check_cond(req, ctx + ".requires")
+        effects = a.get("effects", [])
+        if not isinstance(effects, list):
+            raise ScenarioError(f"{where}: {ctx}.effects must be a list")
+        for j, e in enumerate(effects):
+            ectx = f"{ctx}.effects[{j}]"
+            if not isinstance(e, dict) or set(e) - {"when", "set", "drives"}:
+                raise ScenarioError(f"{where}: {ectx} may only have 'when', 'set' and 'drives'")
+            check_cond(e.get("when", {}), ectx + ".when")
+            check_set(e.get("set", {}), ectx + ".set")
+            for dn, dv in e.get("drives", {}).items():
+                if dn not in dnames:
+                    raise ScenarioError(f"{where}: {ectx} changes unknown drive {dn!r}")
+                if not isinstance(dv, (int, float)) or isinstance(dv, bool):
+                    raise ScenarioError(f"{where}: {ectx}.drives.{dn} must be a number")
+        actions.append(ActionSpec(name, obj, dict(req), tuple(effects)))
+    _unique([a.name for a in actions], "action", where)
+    anames = {a.name for a in actions}
+    for it in intentions:
+        for d in it.desired:
+            if d not in anames:
+                raise ScenarioError(f"{where}: intention {it.name!r} desires unknown action {d!r}")
+        check_cond(it.reasonable, f"intention {it.name!r}.reasonable")
+    for o in obj_names:
+        if not any(a.obj == o for a in actions):
+            raise ScenarioError(f"{where}: object {o!r} has no actions")
+
+    fb = raw.get("feedback", {})
+    learning = dict(raw.get("learning", {}))
+    learning.setdefault("gamma", 0.5)
+    learning.setdefault("xi", 1.0)
+    learning.setdefault("dod", 1.0 / len(drives))
+    learning.setdefault("schedule", [{"from": 0, "alpha": 0.3, "tau": 4.0}, {"from": 1000, "alpha": 0.1, "tau": 2.0}])
+    learning.setdefault("pseudo_update", True)
+    _check_learning(learning, where)
+
+    open_ = dict(raw.get("open", {}))
+    open_.update(overrides or {})
+    opens = _check_open(open_, dnames, objects, base_vars, all_vars, anames, where)
+
+    sc = Scenario(
+        name=str(raw.get("name", Path(source).stem)),
+        raw=raw,
+        drives=tuple(drives),
+        serving=dnames.index(serving_name),
+        locations=locations,
+        human_location=hloc,
+        resting_place=rest,
+        objects=objects,
+        stimuli=tuple(stimuli),
+        actions=tuple(actions),
+        intentions=tuple(intentions),
+        feedback_value=float(fb.get("value", 10)),
+        praise_change=float(fb.get("praise_drive_change", -10)),
+        learning=learning,
+        open=opens,
+        source=source,
+        base_vars=tuple(base_vars),
+        base_values=tuple(tuple(v) for v in base_values),
+    )
+    _compile(sc)
+    return sc
+
+
+def _unique(names: Sequence, what: str, where: str) -> None:
+    seen = set()
+    for n in names:
+        if n in seen:
+            raise ScenarioError(f"{where}: {what} {n!r} is declared twice")
+        seen.add(n)
+
+
+def _check_learning(learning: dict, where: str) -> None:
+    for key, lo, hi in (("gamma", 0.0, 1.0), ("xi", 0.0, 1e6), ("dod", 0.0, 1.0)):
+        v = learning[key]
+        if not isinstance(v, (int, float)) or isinstance(v, bool) or not lo <= v <= hi:
+            raise ScenarioError(f"{where}: learning.{key} = {v!r} is outside [{lo}, {hi}]")
+    sched = learning["schedule"]
+    if not isinstance(sched, list) or not sched or sched[0].get("from") != 0:
+        raise ScenarioError(f"{where}: learning.schedule must be a list starting with from = 0")
+    last = -1
+    for s in sched:
+        if not all(k in s for k in ("from", "alpha", "tau")) or s["from"] <= last:
+            raise ScenarioError(f"{where}: learning.schedule entries need increasing 'from', 'alpha' and 'tau'")
+        if not 0 < s["alpha"] <= 1 or not s["tau"] > 0:
+            raise ScenarioError(f"{where}: learning.schedule: alpha must be in (0, 1] and tau > 0")
+        last = s["from"]
+
+
+def _check_open(open_: dict, dnames, objects, base_vars, all_vars, anames, where) -> dict:
+    out = {}
+    for key, val in open_.items():
+        if key in ("initial_drives", "initial_location", "initial_objects"):
+            continue
+        if key not in OPEN_CHOICES:
+            raise ScenarioError(f"{where}: unknown open choice {key!r}; known: {', '.join(sorted(OPEN_CHOICES))}")
+    for key, (default, allowed) in OPEN_CHOICES.items():
+        val = open_.get(key, default)
+        if isinstance(allowed, tuple) and len(allowed) == 2 and all(isinstance(x, float) for x in allowed):
+            if not isinstance(val, (int, float)) or isinstance(val, bool) or not allowed[0] <= val <= allowed[1]:
+                raise ScenarioError(f"{where}: open.{key} = {val!r} must be a number in [{allowed[0]}, {allowed[1]}]")
+            val = float(val)
+        elif val not in allowed:
+            raise ScenarioError(f"{where}: open.{key} = {val!r} must be one of {list(allowed)}")
+        out[key] = val
+    if out["human_leave_proposal"] in ("MoveToR", "MoveToC") and out["human_leave_proposal"] not in anames:
+        raise ScenarioError(f"{where}: open.human_leave_proposal names unknown action")
+    init = open_.get("initial_drives", {})
+    for dn, v in init.items():
+        if dn not in dnames:
+            raise ScenarioError(f"{where}: open.initial_drives has unknown drive {dn!r}")
+        if not isinstance(v, (int, float)) or not 0 <= v <= 100:
+            raise ScenarioError(f"{where}: open.initial_drives.{dn} = {v!r} must be in [0, 100]")
+    out["initial_drives"] = [float(init.get(dn, 0.0)) for dn in dnames]
+    loc = open_.get("initial_location", all_vars["robot.location"][0])
+    if loc not in all_vars["robot.location"]:
+        raise ScenarioError(f"{where}: open.initial_location {loc!r} is not a location")
+    out["initial_location"] = loc
+    objs = dict(open_.get("initial_objects", {}))
+    for var, val in objs.items():
+        if var not in all_vars or var in ("robot.location", "human.presence", "intention") or var not in base_vars:
+            raise ScenarioError(f"{where}: open.initial_objects has unknown object variable {var!r}")
+        if val not in all_vars[var]:
+            raise ScenarioError(f"{where}: open.initial_objects.{var} = {val!r}; values: {all_vars[var]}")
+    for var in base_vars[3:]:
+        objs.setdefault(var, all_vars[var][0])
+    out["initial_objects"] = objs
+    return out
+
+
+# ---------------------------------------------------------------------------
+# compilation
+
+
+def _holds(cond: Mapping[str, list], view: Mapping[str, str]) -> bool:
+    for var, vals in cond.items():
+        v = view[var]
+        pos = [x for x in vals if not x.startswith("!")]
+        neg = [x[1:] for x in vals if x.startswith("!")]
+        if pos and v not in pos:
+            return False
+        if v in neg:
+            return False
+    return True
+
+
+def _compile(sc: Scenario) -> None:
+    base_vars, base_values = sc.base_vars, sc.base_values
+    radices = [len(v) for v in base_values]
+    n_codes = 1
+    for r in radices:
+        n_codes *= r
+    sc.n_codes = n_codes
+    dnames = sc.drive_names
+    motivs = sc.motivation_names
+    obj_names = sc.object_names
+    act_ids = {a.name: i for i, a in enumerate(sc.actions)}
+    intent_names = sc.intention_names
+
+    # object reduced states (Eq 3.24-3.26); null has one empty state (Eq 3.12)
+    obj_state_vars: list[list[tuple[str, tuple]]] = []
+    obj_state_labels = []
+    for o in obj_names:
+        if o == NULL_OBJECT:
+            obj_state_vars.append([])
+            obj_state_labels.append(("-",))
+            continue
+        spec = sc.objects[o]
+        axes = []
+        if spec["location"] is not None:
+            axes.append((f"{o}.distance", DISTANCES))
+        for var, vals in spec["variables"].items():
+            axes.append((f"{o}.{var}", tuple(vals)))
+        obj_state_vars.append(axes)
+        obj_state_labels.append(tuple("/".join(p) for p in itertools.product(*[vals for _, vals in axes])))
+
+    obj_actions = [tuple(i for i, a in enumerate(sc.actions) if a.obj == o) for o in obj_names]
+    act_obj = tuple(obj_names.index(a.obj) for a in sc.actions)
+    act_local = tuple(obj_actions[act_obj[i]].index(i) for i in range(len(sc.actions)))
+
+    def encode(vals: list[int]) -> int:
+        code = 0
+        for v, r in zip(vals, radices):
+            code = code * r + v
+        return code
+
+    views, codes_vals = [], []
+    for idx in itertools.product(*[range(r) for r in radices]):
+        view = {var: base_values[k][i] for k, (var, i) in enumerate(zip(base_vars, idx))}
+        loc = view["robot.location"]
+        view["human.relation"] = "absent" if view["human.presence"] == "absent" else ("near" if loc == sc.human_location else "far")
+        for o, spec in sc.objects.items():
+            if spec["location"] is not None:
+                view[f"{o}.distance"] = "near" if loc == spec["location"] else "far"
+        views.append(view)
+        codes_vals.append(list(idx))
+
+    stim, stim_names, valid, valid_local, next_code, drive_delta = [], [], [], [], [], []
+    hum, obj_state, intention_of, relation_of, location_of, presence_of = [], [], [], [], [], []
+    with_intention, with_presence, reasonable = [], [], []
+    loc_k, pres_k, int_k = 0, 1, 2
+    detaches = sc.open["leaving_charger_detaches"]
+    for code, (view, idx) in enumerate(zip(views, codes_vals)):
+        s = [0.0] * len(motivs)
+        present = []
+        for st in sc.stimuli:
+            if _holds(st["when"], view):
+                present.append(st["name"])
+                for m, v in st["effects"].items():
+                    s[motivs.index(m)] += float(v)
+        stim.append(tuple(s))
+        stim_names.append(tuple(present))
+        ok = tuple(i for i, a in enumerate(sc.actions) if _holds(a.requires, view))
+        valid.append(ok)
+        valid_local.append(tuple(tuple(act_local[a] for a in ok if act_obj[a] == k) for k in range(len(obj_names))))
+        nxt, dd = [], []
+        for a in sc.actions:
+            new = list(idx)
+            delta = [0.0] * len(dnames)
+            for e in a.effects:
+                if not _holds(e.get("when", {}), view):
+                    continue
+                for var, val in e.get("set", {}).items():
+                    k = base_vars.index(var)
+                    new[k] = base_values[k].index(val)
+                for dn, dv in e.get("drives", {}).items():
+                    delta[dnames.index(dn)] += float(dv)
+            if detaches and new[loc_k] != idx[loc_k]:
+                for o, spec in sc.objects.items():
+                    if spec["location"] == sc.locations[idx[loc_k]]:
+                        for var, val in spec["on_leave"].items():
+                            k = base_vars.index(f"{o}.{var}")
+                            new[k] = base_values[k].index(val)
+            nxt.append(encode(new))
+            dd.append(tuple(delta))
+        next_code.append(tuple(nxt))
+        drive_delta.append(tuple(dd))
+        rel = RELATIONS.index(view["human.relation"])
+        hum.append(idx[int_k] * len(RELATIONS) + rel)
+        os_ = []
+        for k, axes in enumerate(obj_state_vars):
+            si = 0
+            for var, vals in axes:
+                si = si * len(vals) + vals.index(view[var])
+            os_.append(si)
+        obj_state.append(tuple(os_))
+        intention_of.append(idx[int_k])
+        relation_of.append(rel)
+        location_of.append(idx[loc_k])
+        presence_of.append(idx[pres_k])
+        wi = []
+        for i in range(len(intent_names)):
+            new = list(idx)
+            new[int_k] = i
+            wi.append(encode(new))
+        with_intention.append(tuple(wi))
+        wp = []
+        for i in range(len(PRESENCE)):
+            new = list(idx)
+            new[pres_k] = i
+            wp.append(encode(new))
+        with_presence.append(tuple(wp))
+        reasonable.append(tuple(i + 1 for i, it in enumerate(sc.intentions) if _holds(it.reasonable, view)))
+
+    desired = (frozenset(),) + tuple(frozenset(act_ids[d] for d in it.desired) for it in sc.intentions)
+    sc.c = Compiled(
+        action_ids=act_ids,
+        views=views,
+        stim=stim,
+        stim_names=stim_names,
+        valid=valid,
+        valid_local=valid_local,
+        next_code=next_code,
+        drive_delta=drive_delta,
+        hum=hum,
+        obj_state=obj_state,
+        obj_state_labels=obj_state_labels,
+        obj_actions=obj_actions,
+        act_obj=act_obj,
+        act_local=act_local,
+        intention_of=intention_of,
+        relation_of=relation_of,
+        location_of=location_of,
+        presence_of=presence_of,
+        with_intention=with_intention,
+        with_presence=with_presence,
+        reasonable=reasonable,
+        desired=desired,
+        n_hum=len(intent_names) * len(RELATIONS),
+    )

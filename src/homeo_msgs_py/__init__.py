@@ -1,0 +1,1 @@
+"""homeo_msgs_py package."""

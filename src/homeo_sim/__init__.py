@@ -1,0 +1,1 @@
+"""homeo_sim package."""

@@ -1,0 +1,229 @@
+"""``homeo-sim``: the in-process thesis simulation, its metrics, and its benchmark.
+
+    homeo-sim run [--iterations N] [--seed S | --seeds K] [--dod X] [--xi X] [--no-pseudo]
+                  [--scenario FILE] [--set KEY=VALUE ...] [--save-q FILE] [--load-q FILE]
+                  [--trace FILE] [--json] [--workers W] [--quiet]
+    homeo-sim bench [--json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+from homeo_decision.qtable_io import QTableError
+from homeo_decision.scenario import ScenarioError
+
+from .runner import RunConfig, build_scenario, run_episode, run_seeds
+from .stats import aggregate
+from .thesis_values import TABLE_4_5
+
+PROG = "homeo-sim"
+
+
+class UserError(Exception):
+    """A mistake of the user's: reported in one line, exit code 2."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, no usage dump
+        raise UserError(message)
+
+
+def _int_at_least(lo: int):
+    def conv(s: str) -> int:
+        try:
+            v = int(s)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{s!r} is not an integer") from None
+        if v < lo:
+            raise argparse.ArgumentTypeError(f"{v} is below the minimum {lo}")
+        return v
+    return conv
+
+
+def _float_in(lo: float, hi: float):
+    def conv(s: str) -> float:
+        try:
+            v = float(s)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{s!r} is not a number") from None
+        if not (lo <= v <= hi) or math.isnan(v):
+            raise argparse.ArgumentTypeError(f"{v} is outside [{lo}, {hi}]")
+        return v
+    return conv
+
+
+def _setting(s: str) -> tuple[str, object]:
+    if "=" not in s:
+        raise argparse.ArgumentTypeError(f"{s!r} is not KEY=VALUE")
+    k, v = s.split("=", 1)
+    try:
+        val = json.loads(v)
+    except json.JSONDecodeError:
+        val = v
+    return k.strip(), val
+
+
+def add_run_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--iterations", type=_int_at_least(1), default=5000, help="iterations per run (default 5000)")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--seed", type=_int_at_least(0), default=None, help="one run with this seed (default 0)")
+    g.add_argument("--seeds", type=_int_at_least(1), default=None, help="runs with seeds 0..K-1 on all cores")
+    p.add_argument("--dod", type=_float_in(0.0, 1.0), default=None, help="Degree of Dedication in [0, 1] (Eq 3.27)")
+    p.add_argument("--xi", type=_float_in(0.0, 1e6), default=None, help="motivation factor xi >= 0 (Eq 3.20)")
+    p.add_argument("--no-pseudo", action="store_true", help="switch off pseudo updates (Eq 3.23)")
+    p.add_argument("--scenario", metavar="FILE", default=None, help="scenario JSON (default: the thesis scenario)")
+    p.add_argument("--set", metavar="KEY=VALUE", type=_setting, action="append", default=[],
+                   help="override an open choice of the scenario, e.g. --set human_no_intention_prob=0.5")
+    p.add_argument("--workers", type=_int_at_least(1), default=None, help="processes for --seeds (default: all cores)")
+    p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = _Parser(prog=PROG, description="Homeostatic Object-Q robot: the thesis simulation (Section 4.2).")
+    sub = ap.add_subparsers(dest="cmd", required=True, parser_class=_Parser)
+    run = sub.add_parser("run", help="run the simulation and print Table 4.5's metrics")
+    add_run_arguments(run)
+    run.add_argument("--save-q", metavar="FILE", help="save the learned Q-table (with --seeds: FILE per seed)")
+    run.add_argument("--load-q", metavar="FILE", help="start from a saved Q-table")
+    run.add_argument("--trace", metavar="FILE", help="write one JSON line per iteration (with --seeds: FILE per seed)")
+    b = sub.add_parser("bench", help="iterations per second (one core) and the 20-seed wall time")
+    b.add_argument("--iterations", type=_int_at_least(100), default=20000, help="iterations of the single-core run")
+    b.add_argument("--json", action="store_true")
+    return ap
+
+
+def config_from_args(args) -> tuple[RunConfig, list[int]]:
+    seeds = list(range(args.seeds)) if args.seeds else [args.seed or 0]
+    cfg = RunConfig(
+        iterations=args.iterations, seed=seeds[0], dod=args.dod, xi=args.xi,
+        pseudo_update=False if args.no_pseudo else None, scenario=args.scenario, overrides=tuple(args.set),
+        load_q=getattr(args, "load_q", None), save_q=getattr(args, "save_q", None), trace=getattr(args, "trace", None))
+    return cfg, seeds
+
+
+def _per_seed_path(path: str | None, seed: int, many: bool) -> str | None:
+    if path is None or not many:
+        return path
+    p = Path(path)
+    return str(p.with_name(f"{p.stem}.seed{seed}{p.suffix}"))
+
+
+def _progress(total: int, unit: str, quiet: bool):
+    from tqdm import tqdm
+
+    return tqdm(total=total, unit=unit, disable=True if quiet else None, file=sys.stderr, leave=False,
+                dynamic_ncols=True)
+
+
+def cmd_run(args) -> int:
+    cfg, seeds = config_from_args(args)
+    sc = build_scenario(cfg)  # validates the scenario before any worker starts
+    for f in (cfg.load_q,):
+        if f and not Path(f).is_file():
+            raise UserError(f"Q-table file not found: {f}")
+    many = len(seeds) > 1
+    results = []
+    if many and not (cfg.trace or cfg.save_q or cfg.load_q):
+        with _progress(len(seeds), "seed", args.quiet) as bar:
+            results = run_seeds(cfg, seeds, args.workers, on_done=lambda r: bar.update(1))
+    else:
+        with _progress(len(seeds) * cfg.iterations, "it", args.quiet) as bar:
+            step = max(1, cfg.iterations // 100)
+            tick = lambda t: bar.update(step) if t % step == step - 1 else None  # noqa: E731
+            for s in seeds:
+                c = replace(cfg, seed=s, trace=_per_seed_path(cfg.trace, s, many), save_q=_per_seed_path(cfg.save_q, s, many))
+                r = run_episode(c, sc, on_tick=None if args.quiet else tick)
+                if r.load_report is not None and not args.json:
+                    lr = r.load_report
+                    msg = f"loaded Q-table: {', '.join(lr.loaded)}"
+                    if lr.new:
+                        msg += f"; new objects start fresh: {', '.join(lr.new)}"
+                    if lr.dropped:
+                        msg += f"; dropped objects not in this scenario: {', '.join(lr.dropped)}"
+                    print(msg, file=sys.stderr)
+                results.append(r)
+    metrics = aggregate([r.metrics for r in results], sc.drive_names)
+    out = {"iterations": cfg.iterations, "seeds": seeds, "metrics": metrics}
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(format_table(out, sc.drive_names, sc.name))
+    return 0
+
+
+def format_table(out: dict, drive_names, scenario_name: str) -> str:
+    m = out["metrics"]
+    n = len(out["seeds"])
+    lines = [f"scenario {scenario_name}: {out['iterations']} iterations x {n} seed{'s' if n > 1 else ''}"
+             + ("  (mean [95% interval])" if n > 1 else "")]
+
+    def cell(d):
+        if n > 1:
+            return f"{d['mean']:7.3f} [{d['ci95'][0]:7.3f}, {d['ci95'][1]:7.3f}]"
+        return f"{d['mean']:7.3f}"
+
+    w = 28 if n > 1 else 8
+    lines.append(f"{'metric':<10}{'drive':<6} {'ours':>{w}}  {'thesis':>7}")
+    for key in ("HSR", "RSR"):
+        lines.append(f"{key:<10}{'':<6} {cell(m[key]):>{w}}  {TABLE_4_5[key]:7.2f}")
+    for key in ("CDA", "CEDA"):
+        for dn in list(drive_names) + ["all"]:
+            ref = TABLE_4_5[key].get(dn)
+            lines.append(f"{key:<10}{dn:<6} {cell(m[key][dn]):>{w}}  {'' if ref is None else f'{ref:7.2f}':>7}")
+    return "\n".join(lines)
+
+
+def cmd_bench(args) -> int:
+    from homeo_decision.scenario import load_scenario
+
+    sc = load_scenario()
+    cfg = RunConfig(iterations=args.iterations, seed=0)
+    best = math.inf
+    for _ in range(3):
+        t0 = time.perf_counter()
+        run_episode(cfg, sc)
+        best = min(best, time.perf_counter() - t0)
+    ips = args.iterations / best
+    t0 = time.perf_counter()
+    run_seeds(RunConfig(iterations=5000), range(20))
+    wall = time.perf_counter() - t0
+    if args.json:
+        print(json.dumps({"iterations_per_s": ips, "seeds20_wall_s": wall}))
+    else:
+        print(f"core loop, one process : {ips:,.0f} iterations/s (best of 3 runs of {args.iterations})")
+        print(f"20 seeds x 5000 its    : {wall:.2f} s wall on {os.cpu_count()} cores")
+    return 0
+
+
+def main(argv=None) -> int:
+    ap = build_parser()
+    try:
+        args = ap.parse_args(argv)
+        if args.cmd == "run":
+            return cmd_run(args)
+        return cmd_bench(args)
+    except UserError as exc:
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        return 2
+    except (ScenarioError, QTableError) as exc:
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(f"{PROG}: error: {exc.filename or ''}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,88 @@
+"""The simulated human (Algorithm 2, Table 4.3) with the open choices as settings.
+
+Algorithm 2 line 9 reads "intention != null" where the text means "== null": no
+intention, no feedback. Settings the thesis leaves open (scenario ``open``):
+``human_no_intention_prob`` (a new draw is "no intention"), ``human_leave_prob`` /
+``human_return_prob`` (presence), ``human_leave_proposal`` and ``human_proposal_prob``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from homeo_decision.rng import UniformStream
+from homeo_decision.scenario import Scenario
+
+
+@dataclass(slots=True)
+class Response:
+    feedback: int  # +1 / -1 / 0
+    proposal: int | None  # action id
+    satisfied: bool
+
+
+NO_RESPONSE = Response(0, None, False)
+
+
+class SimHuman:
+    def __init__(self, sc: Scenario, seed: int = 0):
+        self.sc = sc
+        o = sc.open
+        self.p_none = o["human_no_intention_prob"]
+        self.p_leave = o["human_leave_prob"]
+        self.p_return = o["human_return_prob"]
+        self.p_propose = o["human_proposal_prob"]
+        self.leave_rule = o["human_leave_proposal"]
+        self.desired = sc.c.desired
+        self.desired_order = [()] + [tuple(sc.c.action_ids[a] for a in it.desired) for it in sc.intentions]
+        self.reasonable = sc.c.reasonable
+        self.reset(seed)
+
+    def reset(self, seed: int | None = None) -> None:
+        if seed is not None:
+            self.seed = int(seed)
+        self.rng = UniformStream(self.seed, "human")
+        self.intention = 0  # Algorithm 2 line 1: intention = null
+        self.present = True
+        self.satisfied = False
+
+    def advance(self, code: int) -> None:
+        """Lines 3-6 (and presence): decide what the human wants in the world ``code``."""
+        u = self.rng.random()
+        if self.present:
+            if u < self.p_leave:
+                self.present, self.intention = False, 0
+                return
+        else:
+            if u < self.p_return:
+                self.present = True
+            else:
+                return
+        if self.satisfied or self.intention == 0:
+            self.satisfied = False
+            if self.rng.random() < self.p_none:
+                self.intention = 0
+                return
+            valid = self.reasonable[code]
+            self.intention = valid[self.rng.index(len(valid))] if valid else 0
+
+    def respond(self, action: int) -> Response:
+        """Lines 8-19: feedback (and a proposal on a miss) for the robot's action."""
+        it = self.intention
+        if it == 0:
+            return NO_RESPONSE
+        if action in self.desired[it]:
+            self.satisfied = True
+            return Response(1, None, True)
+        proposal = None
+        if self.rng.random() < self.p_propose:
+            options = self.desired_order[it]
+            rule = self.leave_rule
+            if len(options) == 1 or rule == "first":
+                proposal = options[0]
+            elif rule == "random":
+                proposal = options[self.rng.index(len(options))]
+            else:
+                named = self.sc.c.action_ids[rule]
+                proposal = named if named in options else options[0]
+        return Response(-1, proposal, False)

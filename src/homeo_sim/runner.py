@@ -1,0 +1,183 @@
+"""The in-process thesis simulation (Section 4.2): world, human, body and robot in one loop.
+
+One iteration (tick t):
+  1. the robot perceives drives and world (the human's intention included) and picks an
+     action by softmax (Algorithm 1 lines 2-17);
+  2. the world and the body apply the action's effects (Table 4.1);
+  3. the human answers with feedback and maybe a proposal (Algorithm 2 lines 8-19);
+  4. feedback moves NAch, drives grow with time (Table 4.2), and the human decides what
+     it wants next (Algorithm 2 lines 3-6);
+  5. the robot perceives the new state s' and learns (Eq 3.14, 3.23);
+  6. the metrics record d(t) after the iteration.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Callable, Iterable, TextIO
+
+from homeo_decision import qtable_io
+from homeo_decision.agent import DecisionCore
+from homeo_decision.drives import DriveModel
+from homeo_decision.scenario import Scenario, load_scenario
+
+from .body import SimBody
+from .human import SimHuman
+from .metrics import MetricRecorder
+from .world import World
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    iterations: int = 5000
+    seed: int = 0
+    dod: float | None = None
+    xi: float | None = None
+    pseudo_update: bool | None = None
+    scenario: str | None = None  # path; None = the thesis scenario
+    overrides: tuple = ()  # (key, value) pairs for the scenario's open choices
+    load_q: str | None = None
+    save_q: str | None = None
+    trace: str | None = None
+    series: bool = False  # keep the per-iteration metric series
+
+
+@dataclass
+class EpisodeResult:
+    seed: int
+    metrics: dict
+    series: dict | None = None
+    load_report: object | None = None
+    actions: list = field(default_factory=list)
+
+
+def build_scenario(cfg: RunConfig) -> Scenario:
+    return load_scenario(cfg.scenario, overrides=dict(cfg.overrides))
+
+
+class Simulation:
+    """World, human, body and robot wired as in the thesis's simulation."""
+
+    def __init__(self, sc: Scenario, cfg: RunConfig):
+        self.sc = sc
+        self.cfg = cfg
+        self.world = World(sc)
+        self.human = SimHuman(sc, cfg.seed)
+        self.body = SimBody(sc)
+        self.drives = DriveModel(sc)
+        self.robot = DecisionCore(sc, cfg.seed, dod=cfg.dod, xi=cfg.xi, pseudo_update=cfg.pseudo_update)
+        self.load_report = None
+        if cfg.load_q:
+            self.load_report = qtable_io.load(self.robot.q, cfg.load_q)
+
+    def run(self, iterations: int, trace: TextIO | None = None, on_tick: Callable[[int], None] | None = None,
+            keep_actions: bool = False) -> EpisodeResult:
+        sc, world, human, body, drives, robot = self.sc, self.world, self.human, self.body, self.drives, self.robot
+        rec = MetricRecorder(sc.drive_names, [d.threshold for d in sc.drives])
+        span_action = sc.open["reward_span"] == "action"
+        names = sc.action_names
+        actions = []
+
+        human.advance(world.code)  # Algorithm 2 lines 1-6: the first intention
+        world.set_human(human.present, human.intention)
+        drives.set_body(body.values)
+        p = robot.perceive(drives.values, world.code)
+        for t in range(iterations):
+            a = robot.select(p, t)
+            before = world.execute(a)
+            body.apply_action(before, a)
+            drives.apply_action(before, a)
+            expressed = human.intention != 0
+            resp = human.respond(a)
+            drives.apply_feedback(resp.feedback)
+            drives.set_body(body.values)
+            after_action = tuple(drives.values) if span_action else None
+            body.apply_time()
+            drives.apply_time(expressed, resp.satisfied)
+            drives.set_body(body.values)
+            human.advance(world.code)
+            world.set_human(human.present, human.intention)
+            p_next = robot.perceive(drives.values, world.code)
+            learned = robot.learn(p, a, after_action or p_next.drives, resp.feedback, resp.proposal, p_next, t)
+            rec.record(p_next.drives, expressed, resp.satisfied)
+            if keep_actions:
+                actions.append(a)
+            if trace is not None:
+                trace.write(json.dumps(trace_line(sc, t, p, a, resp, learned, before)) + "\n")
+            if on_tick is not None:
+                on_tick(t)
+            p = p_next
+        res = EpisodeResult(self.cfg.seed, rec.summary(), rec.series() if self.cfg.series else None, self.load_report, actions)
+        return res
+
+
+def trace_line(sc: Scenario, t: int, p, a: int, resp, learned, code_before: int) -> dict:
+    """One JSON line of ``--trace``: the state the robot decided in and what followed."""
+    it = sc.c.intention_of[p.code]
+    return {
+        "tick": t,
+        "drives": dict(zip(sc.drive_names, p.drives)),
+        "intensities": dict(zip(sc.motivation_names, p.intensities)),
+        "m_dom": sc.motivation_names[p.m_dom],
+        "intention": sc.intention_names[it] if it else None,
+        "action": sc.actions[a].name,
+        "feedback": resp.feedback,
+        "proposal": sc.actions[resp.proposal].name if resp.proposal is not None else None,
+        "reward": learned.reward,
+        "pseudo_reward": learned.pseudo_reward,
+    }
+
+
+def run_episode(cfg: RunConfig, sc: Scenario | None = None, on_tick=None, keep_actions: bool = False) -> EpisodeResult:
+    sc = sc or build_scenario(cfg)
+    sim = Simulation(sc, cfg)
+    if cfg.trace:
+        with open(cfg.trace, "w") as fh:
+            res = sim.run(cfg.iterations, trace=fh, on_tick=on_tick, keep_actions=keep_actions)
+    else:
+        res = sim.run(cfg.iterations, on_tick=on_tick, keep_actions=keep_actions)
+    if cfg.save_q:
+        qtable_io.save(sim.robot.q, cfg.save_q, meta={
+            "iterations": cfg.iterations, "seed": cfg.seed, "dod": sim.robot.dod, "xi": sim.robot.xi,
+            "pseudo_update": sim.robot.pseudo})
+    return res
+
+
+def _run_one(cfg: RunConfig) -> EpisodeResult:
+    return run_episode(cfg)
+
+
+def run_seeds(cfg: RunConfig, seeds: Iterable[int], workers: int | None = None,
+              on_done: Callable[[EpisodeResult], None] | None = None) -> list[EpisodeResult]:
+    """Run one episode per seed, on ``workers`` processes; results come back in seed order."""
+    seeds = list(seeds)
+    cfgs = [replace(cfg, seed=s, trace=None, save_q=None) for s in seeds]
+    workers = max(1, min(workers or os.cpu_count() or 1, len(seeds)))
+    if workers == 1:
+        out = []
+        for c in cfgs:
+            out.append(_run_one(c))
+            if on_done:
+                on_done(out[-1])
+        return out
+    results: dict[int, EpisodeResult] = {}
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        futs = {pool.submit(_run_one, c): c.seed for c in cfgs}
+        from concurrent.futures import as_completed
+
+        for fut in as_completed(futs):
+            r = fut.result()
+            results[r.seed] = r
+            if on_done:
+                on_done(r)
+    return [results[s] for s in seeds]
+
+
+def default_scenario_file() -> Path:
+    from .scenarios import default_scenario_path
+
+    return default_scenario_path()

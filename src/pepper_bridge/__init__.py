@@ -1,0 +1,1 @@
+"""pepper_bridge package."""
