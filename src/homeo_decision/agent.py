@@ -55,6 +55,7 @@ class DecisionCore:
                         pseudo_update=L["pseudo_update"] if pseudo_update is None else pseudo_update,
                         feedback_value=sc.feedback_value if feedback_value is None else feedback_value,
                         feedback=feedback)
+        self._phase_t, self._phase = -1, self.schedule[0]
         self.reseed(seed)
 
     def set_params(self, *, dod=None, xi=None, gamma=None, pseudo_update=None, feedback_value=None, feedback=None) -> None:
@@ -79,6 +80,12 @@ class DecisionCore:
         if feedback is not None:
             self.use_feedback = bool(feedback)
 
+    def phase(self, t: int):
+        """The alpha/tau phase of tick t (cached: select and learn ask for the same tick)."""
+        if t != self._phase_t:
+            self._phase_t, self._phase = t, phase_at(self.schedule, t)
+        return self._phase
+
     def reseed(self, seed: int) -> None:
         self.seed = int(seed)
         self.rng = UniformStream(self.seed, "decision")
@@ -96,13 +103,13 @@ class DecisionCore:
 
     def select(self, p: Percept, t: int) -> int:
         """Lines 11-17: softmax (Eq 3.17) over the valid actions, at the temperature of tick t."""
-        tau = phase_at(self.schedule, t).tau
+        tau = self.phase(t).tau
         return self.q.select(p.states, self.valid[p.code], tau, self.rng.random())
 
     def learn(self, p: Percept, action: int, after: Sequence[float], feedback: int, proposal: int | None,
               p_next: Percept, t: int) -> Learned:
         """Lines 19-24: the Object-Q update (Eq 3.14) and, for a proposal, the pseudo update (Eq 3.23)."""
-        alpha = phase_at(self.schedule, t).alpha
+        alpha = self.phase(t).alpha
         fb = feedback if self.use_feedback else 0
         r = reward(p.drives, after, self.weights, p.m_dom, self.xi, fb, self.f)
         self.q.update(action, p.states, r, p_next.states, alpha, self.gamma, p.code, p_next.code)

@@ -35,14 +35,16 @@ class DriveDynamics:
         v = self.values
         for i in self.idx:
             if d[i]:
-                v[i] = clamp(v[i] + d[i])
+                x = v[i] + d[i]
+                v[i] = 0.0 if x < 0.0 else 100.0 if x > 100.0 else x  # clamp, inlined: hot path
 
     def apply_time(self, skip: int = -1) -> None:
         """Table 4.2: every drive of the subset grows by its rate (``skip`` one of them)."""
         v, r = self.values, self.rates
         for i in self.idx:
             if i != skip:
-                v[i] = clamp(v[i] + r[i])
+                x = v[i] + r[i]
+                v[i] = 0.0 if x < 0.0 else 100.0 if x > 100.0 else x
 
 
 class DriveModel(DriveDynamics):
@@ -63,8 +65,10 @@ class DriveModel(DriveDynamics):
 
     def set_body(self, body_values: Sequence[float]) -> None:
         """Copy the body drives (indexed like all drives) from a body reading."""
+        v = self.values
         for i in self.body_idx:
-            self.values[i] = clamp(float(body_values[i]))
+            x = body_values[i]
+            v[i] = 0.0 if x < 0.0 else 100.0 if x > 100.0 else float(x)
 
     def apply_feedback(self, feedback: int) -> None:
         """Positive feedback lowers the serving drive by 10 (Section 4.2.1); a scolding moves it by an open amount."""

@@ -52,6 +52,7 @@ class ObjectQ:
         self.base = [tuple(c.hum[code] * self.n_os[o] + c.obj_state[code][o] for o in range(self.n_obj)) for code in range(sc.n_codes)]
         self.valid_local = c.valid_local
         self.max_over_valid = sc.open["value_max_over"] == "valid"
+        self.others = tuple(tuple(m for m in range(self.n_obj) if m != o) for o in range(self.n_obj))
         self.reset()
 
     def reset(self) -> None:
@@ -85,7 +86,8 @@ class ObjectQ:
         q, ao, al = self.q, self.act_obj, self.act_local
         vals = [q[ao[a]][states[ao[a]]][al[a]] for a in valid]
         top = max(vals)
-        ex = [math.exp((v - top) / tau) for v in vals]
+        exp = math.exp
+        ex = [exp((v - top) / tau) for v in vals]
         x = u * sum(ex)
         acc = 0.0
         for a, e in zip(valid, ex):
@@ -105,10 +107,17 @@ class ObjectQ:
 
     def collateral_value(self, o_i: int, s: Sequence[int], s2: Sequence[int], code: int, code2: int) -> float:
         """Eq 3.15-3.16: V^{o_i}(s, s') = max_a Q^{o_i}(s', a) + sum_{m != i} dQmax^{o_m}(s, s')."""
-        v = self._max(o_i, s2[o_i], code2)
-        for m in range(self.n_obj):
-            if m != o_i:
-                v += self._max(m, s2[m], code2) - self._max(m, s[m], code)
+        if self.max_over_valid:
+            mx = self._max
+            v = mx(o_i, s2[o_i], code2)
+            for m in self.others[o_i]:
+                v += mx(m, s2[m], code2) - mx(m, s[m], code)
+            return v
+        q = self.q
+        v = max(q[o_i][s2[o_i]])
+        for m in self.others[o_i]:
+            qm = q[m]
+            v += max(qm[s2[m]]) - max(qm[s[m]])
         return v
 
     def update(self, action: int, s: Sequence[int], r: float, s2: Sequence[int], alpha: float, gamma: float, code: int, code2: int) -> float:

@@ -94,8 +94,10 @@ class Simulation:
             expressed = human.intention != 0
             resp = human.respond(a)
             drives.apply_feedback(resp.feedback)
-            drives.set_body(body.values)
-            after_action = tuple(drives.values) if span_action else None
+            after_action = None
+            if span_action:
+                drives.set_body(body.values)
+                after_action = tuple(drives.values)
             body.apply_time()
             drives.apply_time(expressed, resp.satisfied)
             drives.set_body(body.values)
