@@ -44,6 +44,8 @@ class RunConfig:
     save_q: str | None = None
     trace: str | None = None
     series: bool = False  # keep the per-iteration metric series
+    policy: str = "objectq"  # see POLICIES
+    adaptive_dod: bool = False
 
 
 @dataclass
@@ -69,7 +71,7 @@ class Simulation:
         self.human = SimHuman(sc, cfg.seed)
         self.body = SimBody(sc)
         self.drives = DriveModel(sc)
-        self.robot = DecisionCore(sc, cfg.seed, dod=cfg.dod, xi=cfg.xi, pseudo_update=cfg.pseudo_update)
+        self.robot = make_robot(sc, cfg)
         self.load_report = None
         if cfg.load_q:
             self.load_report = qtable_io.load(self.robot.q, cfg.load_q)
@@ -115,6 +117,14 @@ class Simulation:
             p = p_next
         res = EpisodeResult(self.cfg.seed, rec.summary(), rec.series() if self.cfg.series else None, self.load_report, actions)
         return res
+
+
+def make_robot(sc: Scenario, cfg: RunConfig):
+    """The decision maker of a run. Any policy offers DecisionCore's perceive / select / learn
+    and a ``q`` attribute when it has a table to save or load."""
+    if cfg.policy == "objectq" and not cfg.adaptive_dod:
+        return DecisionCore(sc, cfg.seed, dod=cfg.dod, xi=cfg.xi, pseudo_update=cfg.pseudo_update)
+    raise ValueError(f"unknown policy {cfg.policy!r}" + (" with adaptive DoD" if cfg.adaptive_dod else ""))
 
 
 def trace_line(sc: Scenario, t: int, p, a: int, resp, learned, code_before: int) -> dict:
