@@ -215,6 +215,8 @@ def load_scenario(path: str | Path | None = None, overrides: Mapping[str, Any] |
         raise ScenarioError(f"scenario file not found: {p}") from None
     except OSError as exc:
         raise ScenarioError(f"cannot read scenario file {p}: {exc.strerror}") from None
+    except UnicodeDecodeError:
+        raise ScenarioError(f"{p}: not a text (UTF-8) file") from None
     try:
         raw = json.loads(text)
     except json.JSONDecodeError as exc:
@@ -223,6 +225,17 @@ def load_scenario(path: str | Path | None = None, overrides: Mapping[str, Any] |
 
 
 def scenario_from_dict(raw: Any, source: str = "<memory>", overrides: Mapping[str, Any] | None = None) -> Scenario:
+    """Validate and compile a parsed scenario; any malformed part is a ScenarioError."""
+    try:
+        return _scenario_from_dict(raw, source, overrides)
+    except ScenarioError:
+        raise
+    except (TypeError, AttributeError, KeyError, ValueError, IndexError) as exc:
+        # a value of the wrong JSON type somewhere the specific checks do not look
+        raise ScenarioError(f"{source}: malformed scenario ({type(exc).__name__}: {exc})") from None
+
+
+def _scenario_from_dict(raw: Any, source: str, overrides: Mapping[str, Any] | None) -> Scenario:
     where = source
     if not isinstance(raw, dict):
         raise ScenarioError(f"{where}: a scenario must be a JSON object")
@@ -470,7 +483,7 @@ def _check_open(open_: dict, dnames, objects, base_vars, all_vars, anames, where
             if not isinstance(val, (int, float)) or isinstance(val, bool) or not allowed[0] <= val <= allowed[1]:
                 raise ScenarioError(f"{where}: open.{key} = {val!r} must be a number in [{allowed[0]}, {allowed[1]}]")
             val = float(val)
-        elif val not in allowed:
+        elif val not in allowed or isinstance(val, bool) != isinstance(allowed[0], bool):
             raise ScenarioError(f"{where}: open.{key} = {val!r} must be one of {list(allowed)}")
         out[key] = val
     if out["human_leave_proposal"] in ("MoveToR", "MoveToC") and out["human_leave_proposal"] not in anames:

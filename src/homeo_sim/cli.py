@@ -1,8 +1,11 @@
 """``homeo-sim``: the in-process thesis simulation, its metrics, and its benchmark.
 
     homeo-sim run [--iterations N] [--seed S | --seeds K] [--dod X] [--xi X] [--no-pseudo]
+                  [--policy {objectq,random,rule,flatq,nofeedback}] [--adaptive-dod]
                   [--scenario FILE] [--set KEY=VALUE ...] [--save-q FILE] [--load-q FILE]
                   [--trace FILE] [--json] [--workers W] [--quiet]
+    homeo-sim sweep {xi,dod,pseudo} [--seeds K] [--iterations N] [--out DIR] [--json] [--workers W] [--quiet]
+    homeo-sim report --out DIR [--seeds K] [--iterations N] [--workers W] [--quiet]
     homeo-sim bench [--json]
 """
 
@@ -20,8 +23,10 @@ from pathlib import Path
 from homeo_decision.qtable_io import QTableError
 from homeo_decision.scenario import ScenarioError
 
+from homeo_decision.baselines import POLICIES
+
 from .runner import RunConfig, build_scenario, run_episode, run_seeds
-from .stats import aggregate
+from .stats import aggregate, json_safe
 from .thesis_values import TABLE_4_5
 
 PROG = "homeo-sim"
@@ -95,6 +100,30 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--save-q", metavar="FILE", help="save the learned Q-table (with --seeds: FILE per seed)")
     run.add_argument("--load-q", metavar="FILE", help="start from a saved Q-table")
     run.add_argument("--trace", metavar="FILE", help="write one JSON line per iteration (with --seeds: FILE per seed)")
+    run.add_argument("--policy", choices=POLICIES, default="objectq",
+                     help="decision maker: the thesis's Object-Q (default) or a baseline (docs/EXPERIMENTS.md)")
+    run.add_argument("--adaptive-dod", action="store_true",
+                     help="adjust DoD online from the user's and the robot's satisfaction (docs/EXPERIMENTS.md)")
+    sw = sub.add_parser("sweep", help="sweep xi (Fig 4.3), DoD (Fig 4.5) or the pseudo update (Fig 4.4)")
+    sw.add_argument("param", choices=("xi", "dod", "pseudo"), help="the parameter to sweep")
+    sw.add_argument("--seeds", type=_int_at_least(1), default=10, help="seeds 0..K-1 per point (default 10)")
+    sw.add_argument("--iterations", type=_int_at_least(1), default=5000, help="iterations per run (default 5000)")
+    sw.add_argument("--out", metavar="DIR", help="also write sweep-PARAM.json and the figure into DIR")
+    sw.add_argument("--scenario", metavar="FILE", default=None, help="scenario JSON (default: the thesis scenario)")
+    sw.add_argument("--set", metavar="KEY=VALUE", type=_setting, action="append", default=[],
+                    help="override an open choice of the scenario")
+    sw.add_argument("--workers", type=_int_at_least(1), default=None, help="processes (default: all cores)")
+    sw.add_argument("--json", action="store_true", help='print {"param", "points": [{"value", "metrics"}]}')
+    sw.add_argument("--quiet", action="store_true", help="no progress bar")
+    rp = sub.add_parser("report", help="every table and figure of Section 4.2, baselines and adaptive DoD")
+    rp.add_argument("--out", metavar="DIR", required=True, help="directory for the PNGs, report.md and results.json")
+    rp.add_argument("--seeds", type=_int_at_least(2), default=10, help="seeds 0..K-1 per configuration (default 10)")
+    rp.add_argument("--iterations", type=_int_at_least(10), default=5000, help="iterations per run (default 5000)")
+    rp.add_argument("--scenario", metavar="FILE", default=None, help="scenario JSON (default: the thesis scenario)")
+    rp.add_argument("--set", metavar="KEY=VALUE", type=_setting, action="append", default=[],
+                    help="override an open choice of the scenario")
+    rp.add_argument("--workers", type=_int_at_least(1), default=None, help="processes (default: all cores)")
+    rp.add_argument("--quiet", action="store_true", help="no progress bar")
     b = sub.add_parser("bench", help="iterations per second (one core) and the 20-seed wall time")
     b.add_argument("--iterations", type=_int_at_least(100), default=20000, help="iterations of the single-core run")
     b.add_argument("--json", action="store_true")
@@ -106,7 +135,12 @@ def config_from_args(args) -> tuple[RunConfig, list[int]]:
     cfg = RunConfig(
         iterations=args.iterations, seed=seeds[0], dod=args.dod, xi=args.xi,
         pseudo_update=False if args.no_pseudo else None, scenario=args.scenario, overrides=tuple(args.set),
-        load_q=getattr(args, "load_q", None), save_q=getattr(args, "save_q", None), trace=getattr(args, "trace", None))
+        load_q=getattr(args, "load_q", None), save_q=getattr(args, "save_q", None), trace=getattr(args, "trace", None),
+        policy=getattr(args, "policy", "objectq"), adaptive_dod=getattr(args, "adaptive_dod", False))
+    if cfg.adaptive_dod and cfg.policy not in ("objectq", "nofeedback"):
+        raise UserError(f"--adaptive-dod needs --policy objectq or nofeedback (a DoD-weighted Object-Q robot), not {cfg.policy}")
+    if (cfg.save_q or cfg.load_q) and cfg.policy not in ("objectq", "nofeedback"):
+        raise UserError(f"{'--save-q' if cfg.save_q else '--load-q'}: policy {cfg.policy} has no Object-Q table to save or load")
     return cfg, seeds
 
 
@@ -154,7 +188,7 @@ def cmd_run(args) -> int:
     metrics = aggregate([r.metrics for r in results], sc.drive_names)
     out = {"iterations": cfg.iterations, "seeds": seeds, "metrics": metrics}
     if args.json:
-        print(json.dumps(out))
+        print(json.dumps(json_safe(out)))
     else:
         print(format_table(out, sc.drive_names, sc.name))
     return 0
@@ -180,6 +214,64 @@ def format_table(out: dict, drive_names, scenario_name: str) -> str:
             ref = TABLE_4_5[key].get(dn)
             lines.append(f"{key:<10}{dn:<6} {cell(m[key][dn]):>{w}}  {'' if ref is None else f'{ref:7.2f}':>7}")
     return "\n".join(lines)
+
+
+def _out_dir(path: str) -> Path:
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise UserError(f"--out {path}: exists and is not a directory")
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UserError(f"--out {path}: cannot create the directory ({exc.strerror or exc})") from None
+    return p
+
+
+def cmd_sweep(args) -> int:
+    from .sweep import format_sweep, sweep
+
+    base = RunConfig(iterations=args.iterations, scenario=args.scenario, overrides=tuple(args.set))
+    build_scenario(base)  # validates the scenario before any worker starts
+    out_dir = _out_dir(args.out) if args.out else None
+    seeds = list(range(args.seeds))
+    out, raw = sweep(args.param, base, seeds, args.workers, quiet=args.quiet,
+                     curves=out_dir is not None and args.param == "pseudo")
+    if out_dir is not None:
+        from . import report
+
+        (out_dir / f"sweep-{args.param}.json").write_text(json.dumps(out))
+        if args.param == "xi":
+            report.fig_xi(out_dir / "fig4_3_xi.png", out["points"])
+        elif args.param == "dod":
+            sc = build_scenario(base)
+            report.fig_dod(out_dir / "fig4_5_dod.png", out["points"], sc.drive_names)
+        else:
+            sc = build_scenario(base)
+            report.fig_pseudo(out_dir / "fig4_4_pseudo.png", raw[0], raw[1], sc.drive_names[sc.serving])
+            report.fig_pseudo(out_dir / "fig4_4_pseudo_early.png", raw[0], raw[1], sc.drive_names[sc.serving], until=1000)
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(f"sweep {args.param}: {args.iterations} iterations x {args.seeds} seeds per point"
+              + ("  (mean [95% interval])" if args.seeds > 1 else ""))
+        print(format_sweep(out, args.seeds))
+    return 0
+
+
+def cmd_report(args) -> int:
+    from .report import build_report
+
+    base = RunConfig(iterations=args.iterations, scenario=args.scenario, overrides=tuple(args.set))
+    build_scenario(base)
+    out_dir = _out_dir(args.out)
+    data = build_report(out_dir, seeds=args.seeds, iterations=args.iterations, workers=args.workers, quiet=args.quiet,
+                        scenario=args.scenario, overrides=tuple(args.set))
+    fails = [c["check"] for c in data["checks"] if not c["ok"]]
+    print(f"report written to {out_dir / 'report.md'} in {data['timing']['total_s']:.1f} s "
+          f"({data['timing']['jobs']} runs on {data['timing']['workers']} workers)")
+    print(f"trend checks: {len(data['checks']) - len(fails)}/{len(data['checks'])} reproduced"
+          + (f"; not reproduced: {'; '.join(fails)}" if fails else ""))
+    return 0
 
 
 def cmd_bench(args) -> int:
@@ -210,6 +302,10 @@ def main(argv=None) -> int:
         args = ap.parse_args(argv)
         if args.cmd == "run":
             return cmd_run(args)
+        if args.cmd == "sweep":
+            return cmd_sweep(args)
+        if args.cmd == "report":
+            return cmd_report(args)
         return cmd_bench(args)
     except UserError as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)

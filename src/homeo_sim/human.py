@@ -36,6 +36,7 @@ class SimHuman:
         self.desired = sc.c.desired
         self.desired_order = [()] + [tuple(sc.c.action_ids[a] for a in it.desired) for it in sc.intentions]
         self.reasonable = sc.c.reasonable
+        self.with_presence = sc.c.with_presence
         self.reset(seed)
 
     def reset(self, seed: int | None = None) -> None:
@@ -63,7 +64,8 @@ class SimHuman:
             if self.rng.random() < self.p_none:
                 self.intention = 0
                 return
-            valid = self.reasonable[code]
+            # judged in the world as it is with the human present (a returning human can want 'come')
+            valid = self.reasonable[self.with_presence[code][0]]
             self.intention = valid[self.rng.index(len(valid))] if valid else 0
 
     def respond(self, action: int) -> Response:

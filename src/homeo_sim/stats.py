@@ -22,6 +22,8 @@ def describe(values: Sequence[float]) -> dict:
     """``{"mean", "ci95": [lo, hi], "per_seed"}``; one value gives a zero-width interval."""
     xs = [float(v) for v in values]
     n = len(xs)
+    if n == 0:
+        raise ValueError("no values to describe")
     mean = sum(xs) / n
     if n > 1:
         sd = math.sqrt(sum((x - mean) ** 2 for x in xs) / (n - 1))
@@ -40,3 +42,14 @@ def aggregate(per_seed: Sequence[dict], drive_names: Sequence[str]) -> dict:
         "CDA": {k: describe([m["CDA"][k] for m in per_seed]) for k in keys},
         "CEDA": {k: describe([m["CEDA"][k] for m in per_seed]) for k in keys},
     }
+
+
+def json_safe(obj):
+    """Replace NaN/inf (e.g. HSR of a run in which nobody wanted anything) by null: strict JSON."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_safe(v) for v in obj]
+    return obj

@@ -1,0 +1,176 @@
+"""``homeo-sim`` as a user runs it: one-line errors, the --json layout, --trace, --save-q / --load-q."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from homeo_sim.runner import RunConfig, run_episode
+
+SCRIPT = Path(sys.executable).parent / "homeo-sim"
+TRACE_KEYS = {"tick", "drives", "intensities", "m_dom", "intention", "action", "feedback", "proposal", "reward"}
+DRIVE_KEYS = {"NAch", "NSoc", "NRes", "NEng", "all"}
+
+
+def cli(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "homeo_sim.cli", *map(str, args)], capture_output=True, text=True,
+                          cwd=cwd, timeout=120)
+
+
+def assert_one_line_error(proc, *words):
+    assert proc.returncode == 2, (proc.returncode, proc.stderr)
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 1, proc.stderr
+    assert lines[0].startswith("homeo-sim: error:"), lines[0]
+    assert "Traceback" not in proc.stderr
+    for w in words:
+        assert w in lines[0], lines[0]
+
+
+# -- errors ----------------------------------------------------------------------------------
+
+def test_dod_out_of_range():
+    assert_one_line_error(cli("run", "--dod", "1.5", "--iterations", "10"), "1.5")
+
+
+def test_negative_iterations():
+    assert_one_line_error(cli("run", "--iterations", "-1"), "-1")
+
+
+def test_missing_scenario(tmp_path):
+    assert_one_line_error(cli("run", "--iterations", "10", "--scenario", tmp_path / "nope.json"), "nope.json")
+
+
+def test_malformed_scenario(tmp_path):
+    p = tmp_path / "bad.json"
+    p.write_text("{ this is not json")
+    assert_one_line_error(cli("run", "--iterations", "10", "--scenario", p), "JSON")
+
+
+def test_scenario_action_on_unknown_object(tmp_path, thesis_raw):
+    thesis_raw["actions"][0]["object"] = "fridge"
+    p = tmp_path / "s.json"
+    p.write_text(json.dumps(thesis_raw))
+    assert_one_line_error(cli("run", "--iterations", "10", "--scenario", p), "fridge")
+
+
+def test_scenario_with_wrong_json_type(tmp_path, thesis_raw):
+    thesis_raw["actions"].append(42)
+    p = tmp_path / "s.json"
+    p.write_text(json.dumps(thesis_raw))
+    assert_one_line_error(cli("run", "--iterations", "10", "--scenario", p))
+
+
+def test_corrupt_q_table(tmp_path):
+    p = tmp_path / "q.json"
+    p.write_text("garbage, not a table")
+    assert_one_line_error(cli("run", "--iterations", "10", "--load-q", p), "q.json")
+
+
+def test_missing_q_table(tmp_path):
+    assert_one_line_error(cli("run", "--iterations", "10", "--load-q", tmp_path / "none.json"), "none.json")
+
+
+def test_unknown_open_choice_via_set():
+    assert_one_line_error(cli("run", "--iterations", "10", "--set", "human_mood=1"), "human_mood")
+
+
+# -- output ---------------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def json_run():
+    proc = cli("run", "--iterations", 200, "--seeds", 2, "--json", "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout)
+
+
+def check_metric(m, n_seeds):
+    assert set(m) == {"mean", "ci95", "per_seed"}
+    assert len(m["per_seed"]) == n_seeds
+    assert m["mean"] == pytest.approx(sum(m["per_seed"]) / n_seeds)
+    lo, hi = m["ci95"]
+    assert lo <= m["mean"] <= hi
+
+
+def test_json_layout(json_run):
+    assert set(json_run) == {"iterations", "seeds", "metrics"}
+    assert json_run["iterations"] == 200
+    assert json_run["seeds"] == [0, 1]
+    m = json_run["metrics"]
+    assert set(m) == {"HSR", "RSR", "CDA", "CEDA"}
+    for key in ("HSR", "RSR"):
+        check_metric(m[key], 2)
+        assert all(0.0 <= v <= 1.0 for v in m[key]["per_seed"])
+    for key in ("CDA", "CEDA"):
+        assert set(m[key]) == DRIVE_KEYS
+        for d in DRIVE_KEYS:
+            check_metric(m[key][d], 2)
+
+
+def test_json_all_is_mean_of_drives(json_run):
+    # Eq 4.3 / 4.5 per seed
+    for key in ("CDA", "CEDA"):
+        m = json_run["metrics"][key]
+        for s in range(2):
+            drives = [m[d]["per_seed"][s] for d in ("NAch", "NSoc", "NRes", "NEng")]
+            assert m["all"]["per_seed"][s] == pytest.approx(sum(drives) / 4)
+
+
+def test_json_matches_in_process_runs(json_run):
+    for s in (0, 1):
+        ref = run_episode(RunConfig(iterations=200, seed=s)).metrics
+        assert json_run["metrics"]["HSR"]["per_seed"][s] == pytest.approx(ref["HSR"])
+        assert json_run["metrics"]["CDA"]["NEng"]["per_seed"][s] == pytest.approx(ref["CDA"]["NEng"])
+
+
+def test_table_output_mentions_thesis_values():
+    proc = cli("run", "--iterations", 50, "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    assert "HSR" in proc.stdout and "0.82" in proc.stdout  # Table 4.5 printed beside ours
+
+
+def test_trace(tmp_path):
+    t = tmp_path / "trace.jsonl"
+    proc = cli("run", "--iterations", 60, "--seed", 1, "--trace", t, "--quiet", "--json")
+    assert proc.returncode == 0, proc.stderr
+    lines = [json.loads(x) for x in t.read_text().splitlines()]
+    assert len(lines) == 60
+    assert [x["tick"] for x in lines] == list(range(60))
+    for x in lines:
+        assert TRACE_KEYS <= set(x), set(x)
+        assert set(x["drives"]) == {"NAch", "NSoc", "NRes", "NEng"}
+        assert set(x["intensities"]) == {"Serving", "Social", "Relaxative", "Survival"}
+        assert x["feedback"] in (-1, 0, 1)
+
+
+def test_save_then_load_q(tmp_path):
+    q = tmp_path / "out" / "q.json"
+    proc = cli("run", "--iterations", 150, "--seed", 0, "--save-q", q, "--quiet", "--json")
+    assert proc.returncode == 0, proc.stderr
+    raw = json.loads(q.read_text())
+    assert raw["schema"] == "homeo-qtable"
+    assert any(v != 0.0 for t in raw["tables"].values() for row in t.values() for v in row.values())  # learned
+    proc = cli("run", "--iterations", 50, "--seed", 1, "--load-q", q, "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    assert "loaded Q-table" in proc.stderr
+
+
+def test_installed_script():
+    if not SCRIPT.exists():
+        pytest.skip("homeo-sim console script not installed next to this interpreter")
+    proc = subprocess.run([str(SCRIPT), "run", "--dod", "1.5"], capture_output=True, text=True, timeout=60)
+    assert_one_line_error(proc, "1.5")
+
+
+def test_json_is_strict_json_without_intentions():
+    proc = cli("run", "--iterations", 20, "--set", "human_no_intention_prob=1", "--json", "--quiet")
+    assert proc.returncode == 0, proc.stderr
+
+    def reject(name):
+        raise ValueError(f"non-standard JSON constant {name}")
+
+    json.loads(proc.stdout, parse_constant=reject)
