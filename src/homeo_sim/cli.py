@@ -239,7 +239,7 @@ def cmd_sweep(args) -> int:
     if out_dir is not None:
         from . import report
 
-        (out_dir / f"sweep-{args.param}.json").write_text(json.dumps(out))
+        (out_dir / f"sweep-{args.param}.json").write_text(json.dumps(json_safe(out)))
         if args.param == "xi":
             report.fig_xi(out_dir / "fig4_3_xi.png", out["points"])
         elif args.param == "dod":
@@ -250,7 +250,7 @@ def cmd_sweep(args) -> int:
             report.fig_pseudo(out_dir / "fig4_4_pseudo.png", raw[0], raw[1], sc.drive_names[sc.serving])
             report.fig_pseudo(out_dir / "fig4_4_pseudo_early.png", raw[0], raw[1], sc.drive_names[sc.serving], until=1000)
     if args.json:
-        print(json.dumps(out))
+        print(json.dumps(json_safe(out)))
     else:
         print(f"sweep {args.param}: {args.iterations} iterations x {args.seeds} seeds per point"
               + ("  (mean [95% interval])" if args.seeds > 1 else ""))

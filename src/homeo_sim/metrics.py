@@ -76,4 +76,6 @@ def cumulative_series(drives: np.ndarray, expressed: np.ndarray, satisfied: np.n
         "CEDA": {nm: ceda[:, i] for i, nm in enumerate(names)} | {"all": ceda.mean(axis=1)},
         "HSR": hsr,
         "RSR": rsr,
+        "expressed": expressed,  # per iteration: an intention was expressed (for moving-window rates)
+        "satisfied": satisfied,  # per iteration: the robot's action satisfied it
     }

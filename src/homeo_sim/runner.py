@@ -121,10 +121,22 @@ class Simulation:
 
 def make_robot(sc: Scenario, cfg: RunConfig):
     """The decision maker of a run. Any policy offers DecisionCore's perceive / select / learn
-    and a ``q`` attribute when it has a table to save or load."""
-    if cfg.policy == "objectq" and not cfg.adaptive_dod:
-        return DecisionCore(sc, cfg.seed, dod=cfg.dod, xi=cfg.xi, pseudo_update=cfg.pseudo_update)
-    raise ValueError(f"unknown policy {cfg.policy!r}" + (" with adaptive DoD" if cfg.adaptive_dod else ""))
+    and a ``q`` attribute when it has a table to save or load (see homeo_decision.baselines)."""
+    from homeo_decision.adaptive_dod import AdaptiveDoDRobot
+    from homeo_decision.baselines import POLICIES, make_policy
+    from homeo_decision.objectq import ObjectQ
+
+    if cfg.policy not in POLICIES:
+        raise ValueError(f"unknown policy {cfg.policy!r}; known: {', '.join(POLICIES)}")
+    if cfg.adaptive_dod and cfg.policy not in ("objectq", "nofeedback"):
+        raise ValueError(f"--adaptive-dod needs a DoD-weighted Object-Q robot (objectq or nofeedback), not {cfg.policy!r}")
+    robot = make_policy(cfg.policy, sc, cfg.seed, dod=cfg.dod, xi=cfg.xi, pseudo_update=cfg.pseudo_update)
+    if cfg.adaptive_dod:
+        robot = AdaptiveDoDRobot(robot)
+    if (cfg.save_q or cfg.load_q) and not isinstance(getattr(robot, "q", None), ObjectQ):
+        what = "--save-q" if cfg.save_q else "--load-q"
+        raise qtable_io.QTableError(f"{what}: policy {cfg.policy!r} has no Object-Q table to save or load")
+    return robot
 
 
 def trace_line(sc: Scenario, t: int, p, a: int, resp, learned, code_before: int) -> dict:
@@ -153,9 +165,11 @@ def run_episode(cfg: RunConfig, sc: Scenario | None = None, on_tick=None, keep_a
     else:
         res = sim.run(cfg.iterations, on_tick=on_tick, keep_actions=keep_actions)
     if cfg.save_q:
-        qtable_io.save(sim.robot.q, cfg.save_q, meta={
-            "iterations": cfg.iterations, "seed": cfg.seed, "dod": sim.robot.dod, "xi": sim.robot.xi,
-            "pseudo_update": sim.robot.pseudo})
+        robot = sim.robot
+        qtable_io.save(robot.q, cfg.save_q, meta={
+            "iterations": cfg.iterations, "seed": cfg.seed, "policy": cfg.policy, "adaptive_dod": cfg.adaptive_dod,
+            "dod": getattr(robot, "dod", None), "xi": getattr(robot, "xi", None),
+            "pseudo_update": getattr(robot, "pseudo", None)})
     return res
 
 

@@ -1,0 +1,269 @@
+"""Baseline decision makers to compare Object Q-learning with (docs/EXPERIMENTS.md).
+
+Every policy offers DecisionCore's interface, so the runner drives them all alike:
+
+    perceive(drives, code) -> Percept
+    select(p, t) -> action id
+    learn(p, action, after, feedback, proposal, p_next, t) -> Learned
+
+and a ``q`` attribute only when it keeps a Q-table. The policies:
+
+``RandomPolicy``
+    a uniformly random valid action (Table 3.3 constraints), from the ``policy`` stream.
+``RulePolicy``
+    a hand-written fixed-priority threshold rule, the usual behaviour-tree answer:
+    charge when the battery need reaches its threshold (and keep charging down to a low
+    mark), else serve the expressed intention with the action the user wants, else rest,
+    else socialise, else idle. It knows the intention -> action mapping (a programmer
+    wrote it down) and never learns.
+``FlatQ``
+    standard Q-learning (Eq 2.9) over the full Cartesian state of Eq 3.5/3.8,
+    m_dom x S_hum x prod_o S_o, with no state reduction and no collateral term; the same
+    reward (Eq 3.18-3.22, DoD weights and motivation factor), softmax (Eq 3.17) and
+    alpha/tau schedule as Object-Q; no proposals (no pseudo update).
+
+The purely homeostatic robot of the earlier works is ``DecisionCore(..., feedback=False)``
+(no feedback reward, no proposals); ``make_policy`` builds any of them by name.
+
+Every percept still carries the intensities and the dominant motivation (Eq 3.2-3.3), and
+``learn`` returns the reward of Eq 3.18 for the trace, even for policies that ignore it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+from .agent import DecisionCore, Learned, Percept
+from .motivation import dod_weights, dominant, intensities
+from .objectq import phase_at, schedule_from
+from .reward import reward
+from .rng import UniformStream
+from .scenario import NULL_OBJECT, Scenario
+
+POLICIES = ("objectq", "random", "rule", "flatq", "nofeedback")
+
+
+class _Perceiving:
+    """Shared perception (Eq 3.2-3.3) and the trace reward (Eq 3.18) for baselines."""
+
+    def __init__(self, sc: Scenario, seed: int, dod: float | None, xi: float | None):
+        L = sc.learning
+        self.sc = sc
+        self.thresholds = [d.threshold for d in sc.drives]
+        self.tie_break = sc.open["tie_break"]
+        self.stim = sc.c.stim
+        self.valid = sc.c.valid
+        self.serving = sc.serving
+        self.dod = float(L["dod"] if dod is None else dod)
+        self.xi = float(L["xi"] if xi is None else xi)
+        self.weights = dod_weights(self.dod, len(sc.drives), sc.serving)
+        self.f = sc.feedback_value
+        self.pseudo = False
+        self.reseed(seed)
+
+    def reseed(self, seed: int) -> None:
+        self.seed = int(seed)
+        self.rng = UniformStream(self.seed, "policy")
+
+    def _states(self, m_dom: int, code: int) -> tuple:
+        return ()
+
+    def perceive(self, drives: Sequence[float], code: int) -> Percept:
+        inten = intensities(drives, self.thresholds, self.stim[code])
+        m = dominant(inten, self.tie_break)
+        return Percept(code, tuple(drives), inten, m, self._states(m, code))
+
+    def learn(self, p: Percept, action: int, after: Sequence[float], feedback: int, proposal: int | None,
+              p_next: Percept, t: int) -> Learned:
+        return Learned(reward(p.drives, after, self.weights, p.m_dom, self.xi, feedback, self.f), None)
+
+
+class RandomPolicy(_Perceiving):
+    """A uniformly random valid action."""
+
+    def __init__(self, sc: Scenario, seed: int = 0, *, dod: float | None = None, xi: float | None = None):
+        super().__init__(sc, seed, dod, xi)
+
+    def select(self, p: Percept, t: int) -> int:
+        valid = self.valid[p.code]
+        return valid[self.rng.index(len(valid))]
+
+
+@dataclass(frozen=True)
+class RuleSettings:
+    """Constants of the rule policy. ``None`` thresholds take the scenario's activation
+    thresholds (Table 3.1): the rule acts on a need exactly when the homeostatic robot's
+    motivation for it would be active."""
+
+    charge_at: float | None = None  # start charging when NEng >= this (None: NEng's threshold, 50)
+    charge_until: float = 10.0  # keep charging (Stay while charging) while NEng > this
+    rest_at: float | None = None  # rest when NRes >= this (None: NRes's threshold, 50)
+    chat_at: float | None = None  # chat when NSoc >= this (None: NSoc's threshold, 70)
+
+
+class RulePolicy(_Perceiving):
+    """Fixed-priority threshold rules for the thesis scenario (a behaviour-tree selector).
+
+    1. battery: NEng >= charge_at, or attached and NEng > charge_until ->
+       MoveToC if the charger is far, Attach if idle, Stay if charging;
+    2. serve: an intention is expressed -> its first valid desired action (Table 4.3);
+    3. rest: NRes >= rest_at -> Rest, or MoveToR first when the human is near;
+    4. socialise: NSoc >= chat_at and the human present -> Chat, or MoveToH first;
+    5. idle: Rest if allowed, else Chat, else the first valid action.
+    """
+
+    NEEDED_ACTIONS = ("MoveToC", "Attach", "Stay", "Rest", "MoveToR", "Chat", "MoveToH")
+    NEEDED_DRIVES = ("NEng", "NRes", "NSoc")
+
+    def __init__(self, sc: Scenario, seed: int = 0, *, dod: float | None = None, xi: float | None = None,
+                 settings: RuleSettings | None = None):
+        super().__init__(sc, seed, dod, xi)
+        missing = [a for a in self.NEEDED_ACTIONS if a not in sc.action_names]
+        missing += [d for d in self.NEEDED_DRIVES if d not in sc.drive_names]
+        if "charger" not in sc.objects:
+            missing.append("charger")
+        if missing:
+            raise ValueError(f"the rule policy is written for the thesis scenario; {sc.name!r} lacks {', '.join(missing)}")
+        s = settings or RuleSettings()
+        thr = {d.name: d.threshold for d in sc.drives}
+        self.settings = s
+        self.charge_at = thr["NEng"] if s.charge_at is None else float(s.charge_at)
+        self.charge_until = float(s.charge_until)
+        self.rest_at = thr["NRes"] if s.rest_at is None else float(s.rest_at)
+        self.chat_at = thr["NSoc"] if s.chat_at is None else float(s.chat_at)
+        names = sc.drive_names
+        self.i_eng, self.i_res, self.i_soc = names.index("NEng"), names.index("NRes"), names.index("NSoc")
+        self.a = {n: sc.action_index(n) for n in self.NEEDED_ACTIONS}
+        c = sc.c
+        self.desired = [tuple(c.action_ids[a] for a in it.desired) for it in sc.intentions]
+        self.views = c.views
+
+    def select(self, p: Percept, t: int) -> int:
+        v = self.views[p.code]
+        valid = self.valid[p.code]
+        a = self.a
+        d = p.drives
+        near_charger = v["charger.distance"] == "near"
+        charging = v["charger.status"] == "charging"
+        rel = v["human.relation"]
+        # 1. battery
+        if d[self.i_eng] >= self.charge_at or (charging and near_charger and d[self.i_eng] > self.charge_until):
+            if not near_charger:
+                return a["MoveToC"]
+            return a["Stay"] if charging else a["Attach"]
+        # 2. serve
+        it = self.sc.c.intention_of[p.code]
+        if it:
+            for act in self.desired[it - 1]:
+                if act in valid:
+                    return act
+        # 3. rest
+        if d[self.i_res] >= self.rest_at:
+            return a["Rest"] if a["Rest"] in valid else a["MoveToR"]
+        # 4. socialise
+        if d[self.i_soc] >= self.chat_at and rel != "absent":
+            return a["Chat"] if a["Chat"] in valid else a["MoveToH"]
+        # 5. idle
+        for act in (a["Rest"], a["Chat"]):
+            if act in valid:
+                return act
+        return valid[0]
+
+
+class FlatQ(_Perceiving):
+    """Standard Q-learning (Eq 2.9) over the full Cartesian state m_dom x S_hum x prod_o S_o.
+
+    ``q[s][a]`` over all actions of the scenario; the softmax (Eq 3.17) runs over the
+    valid ones; V(s') = max_a' Q(s', a') over all actions (or the valid ones, following the
+    scenario's open choice ``value_max_over``, as Object-Q does).
+    """
+
+    def __init__(self, sc: Scenario, seed: int = 0, *, dod: float | None = None, xi: float | None = None,
+                 gamma: float | None = None, feedback_value: float | None = None):
+        super().__init__(sc, seed, dod, xi)
+        c = sc.c
+        self.gamma = float(sc.learning["gamma"] if gamma is None else gamma)
+        if feedback_value is not None:
+            self.f = float(feedback_value)
+        self.schedule = schedule_from(sc.learning)
+        self.initial_q = float(sc.open["initial_q"])
+        objs = [k for k, o in enumerate(sc.object_names) if o != NULL_OBJECT]
+        n_os = [len(c.obj_state_labels[k]) for k in objs]
+        n_ext = 1
+        for n in n_os:
+            n_ext *= n
+        self.n_ext = c.n_hum * n_ext  # |S_hum x prod_o S_o|
+        self.n_states = len(sc.drives) * self.n_ext
+        self.n_actions = len(sc.actions)
+        base = []
+        for code in range(sc.n_codes):
+            s = c.hum[code]
+            for k, n in zip(objs, n_os):
+                s = s * n + c.obj_state[code][k]
+            base.append(s)
+        self.base = base
+        self.max_over_valid = sc.open["value_max_over"] == "valid"
+        self.reset()
+
+    def reset(self) -> None:
+        self.q = [[self.initial_q] * self.n_actions for _ in range(self.n_states)]
+
+    def _states(self, m_dom: int, code: int) -> tuple:
+        return (m_dom * self.n_ext + self.base[code],)
+
+    def probabilities(self, p: Percept, t: int) -> list[float]:
+        tau = phase_at(self.schedule, t).tau
+        row = self.q[p.states[0]]
+        vals = [row[a] for a in self.valid[p.code]]
+        top = max(vals)
+        ex = [math.exp((x - top) / tau) for x in vals]
+        z = sum(ex)
+        return [e / z for e in ex]
+
+    def select(self, p: Percept, t: int) -> int:
+        tau = phase_at(self.schedule, t).tau
+        row = self.q[p.states[0]]
+        valid = self.valid[p.code]
+        vals = [row[a] for a in valid]
+        top = max(vals)
+        ex = [math.exp((x - top) / tau) for x in vals]
+        x = self.rng.random() * sum(ex)
+        acc = 0.0
+        for a, e in zip(valid, ex):
+            acc += e
+            if x < acc:
+                return a
+        return valid[-1]
+
+    def value(self, s: int, code: int) -> float:
+        row = self.q[s]
+        if self.max_over_valid:
+            return max(row[a] for a in self.valid[code])
+        return max(row)
+
+    def learn(self, p: Percept, action: int, after: Sequence[float], feedback: int, proposal: int | None,
+              p_next: Percept, t: int) -> Learned:
+        """Eq 2.9: Q(s, a) <- (1 - alpha) Q(s, a) + alpha (r + gamma max_a' Q(s', a'))."""
+        alpha = phase_at(self.schedule, t).alpha
+        r = reward(p.drives, after, self.weights, p.m_dom, self.xi, feedback, self.f)
+        row = self.q[p.states[0]]
+        row[action] = (1.0 - alpha) * row[action] + alpha * (r + self.gamma * self.value(p_next.states[0], p_next.code))
+        return Learned(r, None)
+
+
+def make_policy(name: str, sc: Scenario, seed: int = 0, *, dod: float | None = None, xi: float | None = None,
+                pseudo_update: bool | None = None):
+    """A decision maker by name (one of ``POLICIES``)."""
+    if name == "objectq":
+        return DecisionCore(sc, seed, dod=dod, xi=xi, pseudo_update=pseudo_update)
+    if name == "nofeedback":
+        return DecisionCore(sc, seed, dod=dod, xi=xi, pseudo_update=pseudo_update, feedback=False)
+    if name == "random":
+        return RandomPolicy(sc, seed, dod=dod, xi=xi)
+    if name == "rule":
+        return RulePolicy(sc, seed, dod=dod, xi=xi)
+    if name == "flatq":
+        return FlatQ(sc, seed, dod=dod, xi=xi)
+    raise ValueError(f"unknown policy {name!r}; known: {', '.join(POLICIES)}")
