@@ -31,13 +31,12 @@ Every percept still carries the intensities and the dominant motivation (Eq 3.2-
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Sequence
 
 from .agent import DecisionCore, Learned, Percept
 from .motivation import dod_weights, dominant, intensities
-from .objectq import phase_at, schedule_from
+from .objectq import phase_at, schedule_from, softmax_pick, softmax_probs
 from .reward import reward
 from .rng import UniformStream
 from .scenario import NULL_OBJECT, Scenario
@@ -216,26 +215,13 @@ class FlatQ(_Perceiving):
     def probabilities(self, p: Percept, t: int) -> list[float]:
         tau = phase_at(self.schedule, t).tau
         row = self.q[p.states[0]]
-        vals = [row[a] for a in self.valid[p.code]]
-        top = max(vals)
-        ex = [math.exp((x - top) / tau) for x in vals]
-        z = sum(ex)
-        return [e / z for e in ex]
+        return softmax_probs([row[a] for a in self.valid[p.code]], tau)
 
     def select(self, p: Percept, t: int) -> int:
         tau = phase_at(self.schedule, t).tau
         row = self.q[p.states[0]]
         valid = self.valid[p.code]
-        vals = [row[a] for a in valid]
-        top = max(vals)
-        ex = [math.exp((x - top) / tau) for x in vals]
-        x = self.rng.random() * sum(ex)
-        acc = 0.0
-        for a, e in zip(valid, ex):
-            acc += e
-            if x < acc:
-                return a
-        return valid[-1]
+        return softmax_pick([row[a] for a in valid], valid, tau, self.rng.random())
 
     def value(self, s: int, code: int) -> float:
         row = self.q[s]

@@ -34,6 +34,31 @@ def phase_at(schedule: Sequence[Phase], t: int) -> Phase:
     return cur
 
 
+def softmax_probs(values: Sequence[float], tau: float) -> list[float]:
+    """Eq 3.17: P(a) = exp(Q(a)/tau) / sum exp(Q/tau), shifted by the max against overflow."""
+    top = max(values)
+    ex = [math.exp((v - top) / tau) for v in values]
+    z = sum(ex)
+    return [e / z for e in ex]
+
+
+def softmax_pick(values: Sequence[float], actions: Sequence[int], tau: float, u: float) -> int:
+    """Eq 3.17 sampling: the action whose cumulative softmax weight first exceeds ``u`` in [0, 1).
+
+    Shifting every value by the maximum leaves the probabilities unchanged and avoids overflow.
+    """
+    top = max(values)
+    exp = math.exp
+    ex = [exp((v - top) / tau) for v in values]
+    x = u * sum(ex)
+    acc = 0.0
+    for a, e in zip(actions, ex):
+        acc += e
+        if x < acc:
+            return a
+    return actions[-1]
+
+
 class ObjectQ:
     """The Q-tables of all objects and the Object Q-learning rules."""
 
@@ -75,26 +100,12 @@ class ObjectQ:
     def probabilities(self, states: Sequence[int], valid: Sequence[int], tau: float) -> list[float]:
         """Eq 3.17: softmax over the valid actions of all objects, each in its own reduced state."""
         q, ao, al = self.q, self.act_obj, self.act_local
-        vals = [q[ao[a]][states[ao[a]]][al[a]] for a in valid]
-        top = max(vals)  # shifting by the max leaves Eq 3.17 unchanged and avoids overflow
-        ex = [math.exp((v - top) / tau) for v in vals]
-        z = sum(ex)
-        return [e / z for e in ex]
+        return softmax_probs([q[ao[a]][states[ao[a]]][al[a]] for a in valid], tau)
 
     def select(self, states: Sequence[int], valid: Sequence[int], tau: float, u: float) -> int:
         """Draw an action from Eq 3.17 with the uniform ``u`` in [0, 1)."""
         q, ao, al = self.q, self.act_obj, self.act_local
-        vals = [q[ao[a]][states[ao[a]]][al[a]] for a in valid]
-        top = max(vals)
-        exp = math.exp
-        ex = [exp((v - top) / tau) for v in vals]
-        x = u * sum(ex)
-        acc = 0.0
-        for a, e in zip(valid, ex):
-            acc += e
-            if x < acc:
-                return a
-        return valid[-1]
+        return softmax_pick([q[ao[a]][states[ao[a]]][al[a]] for a in valid], valid, tau, u)
 
     # -- learning (Eq 3.14-3.16, 3.23) ---------------------------------------
     def _max(self, o: int, s: int, code: int) -> float:
