@@ -144,12 +144,13 @@ def test_every_reasonable_intention_can_be_drawn(always, enc):
     assert seen == {"light", "no_music", "leave"}
 
 
-def test_no_intention_probability_is_respected(thesis, enc):
-    # open.human_no_intention_prob = 0.6 in the thesis scenario; 1000 first draws
-    code = enc(thesis, "H")
+def test_no_intention_probability_is_respected(enc):
+    # open.human_no_intention_prob = 0.6; 1000 first draws
+    sc = load_scenario(overrides={"human_no_intention_prob": 0.6})
+    code = enc(sc, "H")
     none = 0
     for seed in range(1000):
-        h = human_in(thesis, seed)
+        h = human_in(sc, seed)
         h.advance(code)
         none += h.intention == 0
     assert 0.55 < none / 1000 < 0.65
@@ -184,9 +185,9 @@ def test_praise_clamps_nach_at_0(thesis):
     assert dm.values[NAch] == 0.0
 
 
-def test_scolding_uses_open_choice(thesis):
-    dm = model(thesis, [25, 40, 30, 20])
-    dm.apply_feedback(-1)  # scold_drive_change = 0 in thesis.json
+def test_scolding_uses_open_choice():
+    dm = model(load_scenario(overrides={"scold_drive_change": 0}), [25, 40, 30, 20])
+    dm.apply_feedback(-1)  # scold_drive_change = 0
     dm.apply_feedback(0)
     assert dm.values[NAch] == 25.0
     dm5 = model(load_scenario(overrides={"scold_drive_change": 5}), [25, 40, 30, 20])
@@ -255,10 +256,15 @@ def test_world_execute_and_set_human(thesis):
 
 # -- the runner's loop, checked line by line from its trace ------------------------------------
 
+TRACE_OPEN = (("nach_growth", "expressed"), ("scold_drive_change", 0.0), ("human_leave_proposal", "first"),
+              ("human_proposal_prob", 1.0), ("reward_span", "iteration"))
+
+
 @pytest.fixture(scope="module")
 def trace(tmp_path_factory):
     path = tmp_path_factory.mktemp("trace") / "t.jsonl"
-    run_episode(RunConfig(iterations=400, seed=5, trace=str(path)))
+    # open choices pinned here so that the hand-written rules below stay true whatever thesis.json ships
+    run_episode(RunConfig(iterations=400, seed=5, trace=str(path), overrides=TRACE_OPEN))
     return [json.loads(line) for line in path.read_text().splitlines()]
 
 
@@ -292,7 +298,7 @@ def test_trace_feedback_follows_algorithm_2(thesis, trace):
         elif cur["action"] in desired[it]:
             assert (cur["feedback"], cur["proposal"]) == (1, None)
         else:
-            # thesis.json: human_leave_proposal MoveToR, proposal probability 1
+            # TRACE_OPEN: human_leave_proposal "first" (MoveToR for leave), proposal probability 1
             assert cur["feedback"] == -1
             assert cur["proposal"] == thesis.intentions[thesis.intention_names.index(it) - 1].desired[0]
             assert nxt["intention"] == it  # rule 1: an unsatisfied intention remains
@@ -322,3 +328,21 @@ def test_returning_human_can_want_come(enc):
             on_return.append(sc.intention_names[h.intention])
     assert len(on_return) >= 30
     assert "come" in on_return  # 1/3 of draws; (2/3)^30 < 1e-5 by chance
+
+
+def test_metrics_sample_open_choice(tmp_path):
+    # d(t) is the drive vector at the end of iteration t ("end") or before its time increase
+    # ("after_action"). A trace of N+1 iterations shows the end-of-iteration drives of iterations
+    # 0..N-1 as the decision-time drives of lines 1..N. In the first 20 iterations NSoc, NRes and
+    # NEng stay far below 100, so "after_action" = "end" - rate (Table 4.2: 3, 2, 2) exactly.
+    path = tmp_path / "t.jsonl"
+    run_episode(RunConfig(iterations=21, seed=2, trace=str(path)))
+    lines = [json.loads(x) for x in path.read_text().splitlines()]
+    ends = [line["drives"] for line in lines[1:21]]
+    end = run_episode(RunConfig(iterations=20, seed=2)).metrics["CDA"]
+    mid = run_episode(RunConfig(iterations=20, seed=2, overrides=(("metrics_sample", "after_action"),))).metrics["CDA"]
+    for name, rate in (("NSoc", 3), ("NRes", 2), ("NEng", 2)):
+        mean_end = sum(d[name] for d in ends) / 20
+        assert max(d[name] for d in ends) < 97
+        assert end[name] == pytest.approx(mean_end)
+        assert mid[name] == pytest.approx(mean_end - rate)

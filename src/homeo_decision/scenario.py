@@ -42,6 +42,7 @@ OPEN_CHOICES: dict[str, tuple[Any, Any]] = {
     "human_return_prob": (1.0, (0.0, 1.0)),
     "human_leave_proposal": ("first", ("first", "MoveToR", "MoveToC", "random")),
     "human_proposal_prob": (1.0, (0.0, 1.0)),
+    "metrics_sample": ("end", ("end", "after_action")),
 }
 
 

@@ -21,7 +21,6 @@ from pathlib import Path
 from typing import Callable, Iterable, TextIO
 
 from homeo_decision import qtable_io
-from homeo_decision.agent import DecisionCore
 from homeo_decision.drives import DriveModel
 from homeo_decision.scenario import Scenario, load_scenario
 
@@ -81,7 +80,8 @@ class Simulation:
         sc, world, human, body, drives, robot = self.sc, self.world, self.human, self.body, self.drives, self.robot
         rec = MetricRecorder(sc.drive_names, [d.threshold for d in sc.drives])
         span_action = sc.open["reward_span"] == "action"
-        names = sc.action_names
+        # d(t) of the metrics: after the whole iteration, or before the time increase (open choice)
+        sample_after_action = sc.open["metrics_sample"] == "after_action"
         actions = []
 
         human.advance(world.code)  # Algorithm 2 lines 1-6: the first intention
@@ -97,7 +97,7 @@ class Simulation:
             resp = human.respond(a)
             drives.apply_feedback(resp.feedback)
             after_action = None
-            if span_action:
+            if span_action or sample_after_action:
                 drives.set_body(body.values)
                 after_action = tuple(drives.values)
             body.apply_time()
@@ -106,8 +106,9 @@ class Simulation:
             human.advance(world.code)
             world.set_human(human.present, human.intention)
             p_next = robot.perceive(drives.values, world.code)
-            learned = robot.learn(p, a, after_action or p_next.drives, resp.feedback, resp.proposal, p_next, t)
-            rec.record(p_next.drives, expressed, resp.satisfied)
+            learned = robot.learn(p, a, after_action if span_action else p_next.drives, resp.feedback,
+                                  resp.proposal, p_next, t)
+            rec.record(after_action if sample_after_action else p_next.drives, expressed, resp.satisfied)
             if keep_actions:
                 actions.append(a)
             if trace is not None:
