@@ -128,7 +128,7 @@ def test_report_writes_pngs_and_markdown(tmp_path):
     for needle in ("Table 4.5", "Fig 4.3", "Fig 4.4", "Fig 4.5", "Baselines", "adaptive DoD", "Trend checks",
                    "| HSR | | ", " 0.82 |", "Wall time"):
         assert needle in md, needle
-    assert len(data["checks"]) == 8 and all(isinstance(c["ok"], bool) for c in data["checks"])
+    assert len(data["checks"]) == 9 and all(isinstance(c["ok"], bool) for c in data["checks"])
     assert all(c["why"] for c in data["checks"] if not c["ok"])  # a failing check always says why
     res = json.loads((tmp_path / "results.json").read_text())
     assert res["policies"]["rule"]["metrics"]["HSR"]["per_seed"] == data["policies"]["rule"]["metrics"]["HSR"]["per_seed"]
