@@ -174,3 +174,45 @@ def test_json_is_strict_json_without_intentions():
         raise ValueError(f"non-standard JSON constant {name}")
 
     json.loads(proc.stdout, parse_constant=reject)
+
+
+@pytest.mark.parametrize("args", [["run", "--seeds", "400"], ["sweep", "dod", "--seeds", "40"]])
+def test_ctrl_c_stops_workers_and_says_so(args):
+    # Ctrl-C in the middle of a parallel run: exit 130, one line, and no worker left behind
+    import os
+    import signal
+    import time
+
+    proc = subprocess.Popen([sys.executable, "-m", "homeo_sim.cli", *args, "--quiet"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while not _children(proc.pid) and time.monotonic() < deadline:  # wait until the pool is up
+        time.sleep(0.05)
+    kids = _children(proc.pid)
+    assert kids, "no worker processes started"
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert err.strip().splitlines() == ["homeo-sim: interrupted"]
+    for pid in kids:
+        for _ in range(100):
+            if not os.path.exists(f"/proc/{pid}") or "Z" in _state(pid):
+                break
+            time.sleep(0.05)
+        assert not os.path.exists(f"/proc/{pid}") or "Z" in _state(pid), f"worker {pid} still running"
+
+
+def _children(pid: int) -> list[int]:
+    try:
+        with open(f"/proc/{pid}/task/{pid}/children") as fh:
+            return [int(x) for x in fh.read().split()]
+    except OSError:
+        return []
+
+
+def _state(pid: int) -> str:
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            return fh.read().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return "X"

@@ -14,8 +14,6 @@ One iteration (tick t):
 from __future__ import annotations
 
 import json
-import os
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Iterable, TextIO
@@ -181,27 +179,10 @@ def _run_one(cfg: RunConfig) -> EpisodeResult:
 def run_seeds(cfg: RunConfig, seeds: Iterable[int], workers: int | None = None,
               on_done: Callable[[EpisodeResult], None] | None = None) -> list[EpisodeResult]:
     """Run one episode per seed, on ``workers`` processes; results come back in seed order."""
-    seeds = list(seeds)
-    cfgs = [replace(cfg, seed=s, trace=None, save_q=None) for s in seeds]
-    workers = max(1, min(workers or os.cpu_count() or 1, len(seeds)))
-    if workers == 1:
-        out = []
-        for c in cfgs:
-            out.append(_run_one(c))
-            if on_done:
-                on_done(out[-1])
-        return out
-    results: dict[int, EpisodeResult] = {}
-    with ProcessPoolExecutor(max_workers=workers) as pool:
-        futs = {pool.submit(_run_one, c): c.seed for c in cfgs}
-        from concurrent.futures import as_completed
+    from .parallel import parallel_map
 
-        for fut in as_completed(futs):
-            r = fut.result()
-            results[r.seed] = r
-            if on_done:
-                on_done(r)
-    return [results[s] for s in seeds]
+    cfgs = [replace(cfg, seed=s, trace=None, save_q=None) for s in seeds]
+    return parallel_map(_run_one, cfgs, workers, on_done)
 
 
 def default_scenario_file() -> Path:

@@ -15,10 +15,7 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import signal
 import sys
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field, replace
 from typing import Callable, Iterable, Sequence
 
@@ -27,6 +24,7 @@ import numpy as np
 from homeo_decision.scenario import Scenario, load_scenario
 
 from .metrics import INSECURE
+from .parallel import parallel_map
 from .runner import RunConfig, Simulation
 from .stats import aggregate
 
@@ -161,8 +159,9 @@ def run_job(cfg: RunConfig, curves: bool = False) -> JobResult:
     return out
 
 
-def _ignore_sigint() -> None:
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
+def _run_job_args(a: tuple) -> JobResult:
+    cfg, curves = a
+    return run_job(cfg, curves)
 
 
 def run_jobs(cfgs: Sequence[RunConfig], seeds: Iterable[int], workers: int | None = None, curves: bool = False,
@@ -178,28 +177,9 @@ def run_jobs(cfgs: Sequence[RunConfig], seeds: Iterable[int], workers: int | Non
     for k, c in zip(keys, cfgs):
         uniq.setdefault(k, c)
     jobs = [(k, s) for k in uniq for s in seeds]
-    done: dict[tuple[str, int], JobResult] = {}
-    workers = max(1, min(workers or os.cpu_count() or 1, len(jobs)))
-    if workers == 1:
-        for k, s in jobs:
-            done[(k, s)] = run_job(replace(uniq[k], seed=s), curves)
-            if on_done:
-                on_done()
-    else:
-        pool = ProcessPoolExecutor(max_workers=workers, initializer=_ignore_sigint)
-        try:
-            futs = {pool.submit(run_job, replace(uniq[k], seed=s), curves): (k, s) for k, s in jobs}
-            pending = set(futs)
-            while pending:
-                finished, pending = wait(pending, return_when=FIRST_COMPLETED)
-                for f in finished:
-                    done[futs[f]] = f.result()
-                    if on_done:
-                        on_done()
-        except BaseException:
-            pool.shutdown(wait=True, cancel_futures=True)
-            raise
-        pool.shutdown(wait=True)
+    results = parallel_map(_run_job_args, [(replace(uniq[k], seed=s), curves) for k, s in jobs], workers,
+                           (lambda _r: on_done()) if on_done else None)
+    done = dict(zip(jobs, results))
     return [[done[(k, s)] for s in seeds] for k in keys]
 
 
