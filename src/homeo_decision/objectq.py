@@ -78,6 +78,9 @@ class ObjectQ:
         self.valid_local = c.valid_local
         self.max_over_valid = sc.open["value_max_over"] == "valid"
         self.others = tuple(tuple(m for m in range(self.n_obj) if m != o) for o in range(self.n_obj))
+        # every reduced-state tuple, precomputed: states() is on the per-tick path
+        self._states = [[tuple(m * self.stride[o] + b[o] for o in range(self.n_obj)) for b in self.base]
+                        for m in range(self.n_motiv)]
         self.reset()
 
     def reset(self) -> None:
@@ -87,10 +90,9 @@ class ObjectQ:
 
     # -- states --------------------------------------------------------------
     def states(self, m_dom: int, code: int) -> tuple[int, ...]:
-        """Eq 3.11-3.12: the reduced state of every object for this m_dom and world."""
-        b = self.base[code]
-        st = self.stride
-        return tuple(m_dom * st[o] + b[o] for o in range(self.n_obj))
+        """Eq 3.11-3.12: the reduced state of every object for this m_dom and world,
+        ``(m_dom * n_hum + hum) * n_states_o + object_state``."""
+        return self._states[m_dom][code]
 
     def value(self, action: int, states: Sequence[int]) -> float:
         o = self.act_obj[action]
