@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN     = $(VENV)/bin
 STAMP   = $(VENV)/.installed
 
-.PHONY: setup run test bench clean
+.PHONY: setup run test bench report clean
 
 setup: $(STAMP)
 
@@ -22,6 +22,9 @@ test: setup
 
 bench: setup
 	$(BIN)/homeo-sim bench
+
+report: setup
+	$(BIN)/homeo-sim report --out out/report --seeds 10
 
 clean:
 	rm -rf $(VENV) build src/*.egg-info
