@@ -84,11 +84,16 @@ def add_run_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--dod", type=_float_in(0.0, 1.0), default=None, help="Degree of Dedication in [0, 1] (Eq 3.27)")
     p.add_argument("--xi", type=_float_in(0.0, 1e6), default=None, help="motivation factor xi >= 0 (Eq 3.20)")
     p.add_argument("--no-pseudo", action="store_true", help="switch off pseudo updates (Eq 3.23)")
+    add_common_arguments(p)
+    p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+
+
+def add_common_arguments(p: argparse.ArgumentParser) -> None:
+    """Scenario, open-choice overrides, worker count and progress: shared by run, sweep and report."""
     p.add_argument("--scenario", metavar="FILE", default=None, help="scenario JSON (default: the thesis scenario)")
     p.add_argument("--set", metavar="KEY=VALUE", type=_setting, action="append", default=[],
                    help="override an open choice of the scenario, e.g. --set human_no_intention_prob=0.5")
-    p.add_argument("--workers", type=_int_at_least(1), default=None, help="processes for --seeds (default: all cores)")
-    p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    p.add_argument("--workers", type=_int_at_least(1), default=None, help="processes (default: all cores)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
@@ -109,21 +114,13 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("--seeds", type=_int_at_least(1), default=10, help="seeds 0..K-1 per point (default 10)")
     sw.add_argument("--iterations", type=_int_at_least(1), default=5000, help="iterations per run (default 5000)")
     sw.add_argument("--out", metavar="DIR", help="also write sweep-PARAM.json and the figure into DIR")
-    sw.add_argument("--scenario", metavar="FILE", default=None, help="scenario JSON (default: the thesis scenario)")
-    sw.add_argument("--set", metavar="KEY=VALUE", type=_setting, action="append", default=[],
-                    help="override an open choice of the scenario")
-    sw.add_argument("--workers", type=_int_at_least(1), default=None, help="processes (default: all cores)")
+    add_common_arguments(sw)
     sw.add_argument("--json", action="store_true", help='print {"param", "points": [{"value", "metrics"}]}')
-    sw.add_argument("--quiet", action="store_true", help="no progress bar")
     rp = sub.add_parser("report", help="every table and figure of Section 4.2, baselines and adaptive DoD")
     rp.add_argument("--out", metavar="DIR", required=True, help="directory for the PNGs, report.md and results.json")
     rp.add_argument("--seeds", type=_int_at_least(2), default=10, help="seeds 0..K-1 per configuration (default 10)")
     rp.add_argument("--iterations", type=_int_at_least(10), default=5000, help="iterations per run (default 5000)")
-    rp.add_argument("--scenario", metavar="FILE", default=None, help="scenario JSON (default: the thesis scenario)")
-    rp.add_argument("--set", metavar="KEY=VALUE", type=_setting, action="append", default=[],
-                    help="override an open choice of the scenario")
-    rp.add_argument("--workers", type=_int_at_least(1), default=None, help="processes (default: all cores)")
-    rp.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_common_arguments(rp)
     b = sub.add_parser("bench", help="iterations per second (one core) and the 20-seed wall time")
     b.add_argument("--iterations", type=_int_at_least(100), default=20000, help="iterations of the single-core run")
     b.add_argument("--json", action="store_true")
