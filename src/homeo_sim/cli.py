@@ -228,7 +228,7 @@ def cmd_sweep(args) -> int:
     from .sweep import format_sweep, sweep
 
     base = RunConfig(iterations=args.iterations, scenario=args.scenario, overrides=tuple(args.set))
-    build_scenario(base)  # validates the scenario before any worker starts
+    sc = build_scenario(base)  # validates the scenario before any worker starts
     out_dir = _out_dir(args.out) if args.out else None
     seeds = list(range(args.seeds))
     out, raw = sweep(args.param, base, seeds, args.workers, quiet=args.quiet,
@@ -240,10 +240,8 @@ def cmd_sweep(args) -> int:
         if args.param == "xi":
             report.fig_xi(out_dir / "fig4_3_xi.png", out["points"])
         elif args.param == "dod":
-            sc = build_scenario(base)
             report.fig_dod(out_dir / "fig4_5_dod.png", out["points"], sc.drive_names)
         else:
-            sc = build_scenario(base)
             report.fig_pseudo(out_dir / "fig4_4_pseudo.png", raw[0], raw[1], sc.drive_names[sc.serving])
             report.fig_pseudo(out_dir / "fig4_4_pseudo_early.png", raw[0], raw[1], sc.drive_names[sc.serving], until=1000)
     if args.json:
