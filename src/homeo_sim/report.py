@@ -22,9 +22,9 @@ import numpy as np
 from homeo_decision.adaptive_dod import AdaptiveDoDSettings
 
 from . import thesis_values as TV
-from .runner import RunConfig
+from .runner import RunConfig, cached_scenario
 from .stats import describe, t975
-from .sweep import (LEARN_HSR, LEARN_RSR, LEARNING_WINDOW, SWEEPS, JobResult, _scenario, explicit, median_time,
+from .sweep import (LEARN_HSR, LEARN_RSR, LEARNING_WINDOW, SWEEPS, JobResult, explicit, median_time,
                     n_jobs, point_config, progress_bar, run_jobs, summarize_point)
 
 BASELINES = ("random", "rule", "flatq", "nofeedback")
@@ -114,7 +114,7 @@ def build_report(out_dir: str | Path, seeds: int = 10, iterations: int = 5000, w
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     base0 = RunConfig(iterations=iterations, scenario=scenario, overrides=tuple(overrides))
-    sc = _scenario(base0)
+    sc = cached_scenario(base0)
     base = explicit(base0, sc)
     cfgs = report_configs(base)
     seed_list = list(range(seeds))

@@ -21,11 +21,11 @@ from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
-from homeo_decision.scenario import Scenario, load_scenario
+from homeo_decision.scenario import Scenario
 
 from .metrics import INSECURE
 from .parallel import parallel_map
-from .runner import RunConfig, Simulation
+from .runner import RunConfig, Simulation, cached_scenario
 from .stats import aggregate
 
 # the sweeps of the thesis: Fig 4.3 (xi), Fig 4.5 (DoD 0..1 by 0.1), Fig 4.4 (pseudo update on/off)
@@ -79,17 +79,6 @@ class JobResult:
     extra: dict = field(default_factory=dict)
 
 
-_SCENARIOS: dict = {}
-
-
-def _scenario(cfg: RunConfig) -> Scenario:
-    key = (cfg.scenario, json.dumps(list(cfg.overrides), sort_keys=True, default=repr))
-    sc = _SCENARIOS.get(key)
-    if sc is None:
-        sc = _SCENARIOS[key] = load_scenario(cfg.scenario, overrides=dict(cfg.overrides))
-    return sc
-
-
 def window_rates(expressed: np.ndarray, satisfied: np.ndarray, secure: np.ndarray, window: int) -> tuple[np.ndarray, np.ndarray]:
     """HSR and RSR over the trailing ``window`` iterations (fewer at the start); NaN HSR without intentions."""
     def trailing(x):
@@ -128,7 +117,7 @@ def downsample(n: int, points: int = CURVE_POINTS) -> np.ndarray:
 
 def run_job(cfg: RunConfig, curves: bool = False) -> JobResult:
     """One episode; returns metrics, learning speed and (optionally) downsampled curves."""
-    sc = _scenario(cfg)
+    sc = cached_scenario(cfg)
     sim = Simulation(sc, replace(cfg, series=True, trace=None, save_q=None))
     res = sim.run(cfg.iterations)
     s = res.series
@@ -215,7 +204,7 @@ def sweep(param: str, base: RunConfig, seeds: Iterable[int], workers: int | None
     if param not in SWEEPS:
         raise ValueError(f"unknown sweep parameter {param!r}; known: {', '.join(SWEEPS)}")
     seeds = list(seeds)
-    sc = _scenario(base)
+    sc = cached_scenario(base)
     base = explicit(base, sc)
     values = SWEEPS[param]
     cfgs = [point_config(param, v, base) for v in values]
