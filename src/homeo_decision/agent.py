@@ -101,6 +101,10 @@ class DecisionCore:
         m = dominant(inten, self.tie_break)
         return Percept(code, tuple(drives), inten, m, self.q.states(m, code))
 
+    def percept_from(self, code: int, drives: Sequence[float], inten: Sequence[float], m_dom: int) -> Percept:
+        """The Percept of ``perceive`` from intensities and m_dom computed elsewhere (the drives node)."""
+        return Percept(code, tuple(drives), list(inten), m_dom, self.q.states(m_dom, code))
+
     def select(self, p: Percept, t: int) -> int:
         """Lines 11-17: softmax (Eq 3.17) over the valid actions, at the temperature of tick t."""
         tau = self.phase(t).tau

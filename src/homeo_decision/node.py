@@ -1,0 +1,153 @@
+"""``homeo_decision`` node: Object-Q selection and learning (Algorithm 1).
+
+Publishes  /homeo/action (event), /diagnostics
+Subscribes /homeo/drives (state: drives, m_dom and the world they were perceived in),
+           /homeo/outcome (event)
+Services   ~/save_q, ~/load_q (std_srvs/Trigger: the file in q_table_path),
+           ~/reset (forget the Q-table and reseed)
+Parameters dod [0, 1] (Eq 3.27), xi >= 0 (Eq 3.20), gamma [0, 1] (Eq 3.14), feedback (use the
+           user's feedback, Eq 3.21), pseudo_update (Eq 3.23), seed, q_table_path,
+           load_on_start; all but the last take effect on the next tick.
+
+Tick k needs the drives of tick k and the outcome of tick k-1: learn from k-1,
+then choose for k (``RobotStep``).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
+from std_srvs.srv import Trigger
+
+from homeo_msgs_py.lockstep import TickJoin
+from homeo_msgs_py.node_base import HomeoNode, NodeConfigError, run_node
+from homeo_msgs_py.topics import ACTION, DRIVES, OUTCOME
+
+from . import qtable_io
+from .agent import DecisionCore
+from .robot_step import DecisionStage
+
+
+def _float_param(lo: float, hi: float, text: str) -> ParameterDescriptor:
+    return ParameterDescriptor(description=text, floating_point_range=[FloatingPointRange(from_value=lo, to_value=hi)])
+
+
+class DecisionNode(HomeoNode):
+    def __init__(self):
+        super().__init__("homeo_decision")
+        L = self.sc.learning
+        self.declare_parameter("dod", float(L["dod"]), _float_param(0.0, 1.0, "Degree of Dedication (Eq 3.27)"))
+        self.declare_parameter("xi", float(L["xi"]), _float_param(0.0, 1000.0, "motivation factor xi (Eq 3.20)"))
+        self.declare_parameter("gamma", float(L["gamma"]), _float_param(0.0, 1.0, "discount factor (Eq 3.14)"))
+        self.declare_parameter("feedback", True, ParameterDescriptor(description="learn from the user's feedback"))
+        self.declare_parameter("pseudo_update", bool(L["pseudo_update"]),
+                               ParameterDescriptor(description="learn from the user's proposals (Eq 3.23)"))
+        self.declare_parameter("seed", 0, ParameterDescriptor(
+            description="seed of the decision's random stream (setting it reseeds)",
+            integer_range=[IntegerRange(from_value=0, to_value=2**31 - 1, step=1)]))
+        self.declare_parameter("q_table_path", "", ParameterDescriptor(description="Q-table file of ~/save_q, ~/load_q"))
+        self.declare_parameter("load_on_start", False, ParameterDescriptor(
+            description="load q_table_path when the node starts", read_only=True))
+        p = lambda n: self.get_parameter(n).value  # noqa: E731
+        self.core = DecisionCore(self.sc, p("seed"), dod=p("dod"), xi=p("xi"), gamma=p("gamma"),
+                                 pseudo_update=p("pseudo_update"), feedback=p("feedback"))
+        self.stage = DecisionStage(self.core)
+        self.q_path = p("q_table_path")
+        if p("load_on_start"):
+            ok, msg = self._load()
+            if not ok:
+                raise NodeConfigError(f"load_on_start: {msg}")
+            self.get_logger().info(msg)
+        self.add_on_set_parameters_callback(self._on_params)
+
+        self.join = TickJoin({"drives": 0, "outcome": -1})
+        self.pub = self.publisher(ACTION, min_subs=1)
+        self.subscribe(DRIVES, lambda m: self._put("drives", m))
+        self.subscribe(OUTCOME, lambda m: self._put("outcome", m))
+        self.create_service(Trigger, "~/save_q", self._on_save)
+        self.create_service(Trigger, "~/load_q", self._on_load)
+        self.create_service(Trigger, "~/reset", self._on_reset)
+
+    # -- parameters ---------------------------------------------------------------------
+    def _on_params(self, params) -> SetParametersResult:
+        kw = {}
+        for prm in params:
+            if prm.name in ("dod", "xi", "gamma"):
+                kw[prm.name] = prm.value
+            elif prm.name in ("feedback", "pseudo_update"):
+                kw[prm.name] = prm.value
+        try:
+            self.core.set_params(**kw)
+        except ValueError as exc:
+            return SetParametersResult(successful=False, reason=str(exc))
+        for prm in params:
+            if prm.name == "seed":
+                self.core.reseed(prm.value)
+            elif prm.name == "q_table_path":
+                self.q_path = prm.value
+        return SetParametersResult(successful=True)
+
+    # -- ticks ----------------------------------------------------------------------------
+    def _put(self, name, msg) -> None:
+        run = self.join.run
+        done = self.join.put(name, msg)
+        if self.join.run != run:
+            self.stage.restart()
+        for k, inputs in done:
+            self._tick(k, inputs)
+
+    def _tick(self, k: int, inputs: dict) -> None:
+        out = inputs.get("outcome")
+        fields = self.stage.tick(k, inputs["drives"].fields, out.fields if out is not None else None)
+        self.send(self.pub, k, fields, self.join.run)
+
+    # -- services -------------------------------------------------------------------------
+    def _load(self) -> tuple[bool, str]:
+        if not self.q_path:
+            return False, "q_table_path is not set"
+        if not Path(self.q_path).is_file():
+            return False, f"Q-table file not found: {self.q_path}"
+        try:
+            rep = qtable_io.load(self.core.q, self.q_path)
+        except (qtable_io.QTableError, OSError) as exc:
+            return False, str(exc)
+        msg = f"loaded {self.q_path}: {', '.join(rep.loaded)}"
+        if rep.new:
+            msg += f"; new objects start fresh: {', '.join(rep.new)}"
+        if rep.dropped:
+            msg += f"; dropped: {', '.join(rep.dropped)}"
+        return True, msg
+
+    def _on_load(self, request, response):
+        response.success, response.message = self._load()
+        return response
+
+    def _on_save(self, request, response):
+        if not self.q_path:
+            response.success, response.message = False, "q_table_path is not set"
+            return response
+        c = self.core
+        try:
+            qtable_io.save(c.q, self.q_path, meta={"node": self.get_name(), "dod": c.dod, "xi": c.xi,
+                                                   "pseudo_update": c.pseudo, "seed": c.seed})
+        except OSError as exc:
+            response.success, response.message = False, f"{self.q_path}: {exc.strerror or exc}"
+            return response
+        response.success, response.message = True, f"saved {self.q_path}"
+        return response
+
+    def _on_reset(self, request, response):
+        self.core.reset()
+        self.stage.restart()
+        response.success, response.message = True, f"Q-table cleared, decision stream reseeded with {self.core.seed}"
+        return response
+
+
+def main(args=None) -> int:
+    return run_node(DecisionNode, args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,42 @@
+"""QoS profiles of the contract (ARCHITECTURE.md: state latched, events reliable and volatile)."""
+
+from __future__ import annotations
+
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from .topics import TOPICS
+
+# State: the newest value is what matters, and a late joiner gets it (latched).
+STATE_PUB = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                       durability=DurabilityPolicy.TRANSIENT_LOCAL)
+# Readers keep a few: a burst of garbage on the topic must not push out the real message
+# before the executor takes it. Depth does not affect QoS compatibility.
+STATE_SUB = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=ReliabilityPolicy.RELIABLE,
+                       durability=DurabilityPolicy.TRANSIENT_LOCAL)
+EVENT = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=50, reliability=ReliabilityPolicy.RELIABLE,
+                   durability=DurabilityPolicy.VOLATILE)
+
+
+def pub_qos(topic: str) -> QoSProfile:
+    return STATE_PUB if TOPICS[topic][1] == "state" else EVENT
+
+
+def sub_qos(topic: str) -> QoSProfile:
+    return STATE_SUB if TOPICS[topic][1] == "state" else EVENT
+
+
+def quiet_pub_events():
+    """No QoS-event handlers on a writer. rclpy adds two per endpoint by default (incompatible
+    QoS / type warnings), and every handler is re-added to the wait set on every spin: about a
+    third of a node's time per tick (measured with cProfile). The graph checks matching itself
+    (the simulation waits for its readers and names what is missing)."""
+    from rclpy.event_handler import PublisherEventCallbacks
+
+    return PublisherEventCallbacks(use_default_callbacks=False)
+
+
+def quiet_sub_events():
+    """As ``quiet_pub_events``, for a reader."""
+    from rclpy.event_handler import SubscriptionEventCallbacks
+
+    return SubscriptionEventCallbacks(use_default_callbacks=False)

@@ -1,0 +1,318 @@
+"""The message contract: one JSON schema per payload, encode/decode with validation (no rclpy).
+
+Every message is a ``std_msgs/msg/String`` whose ``data`` is one JSON object::
+
+    {"schema": "homeo/world", "version": 1, "run": 0, "tick": 12, "stamp": 1700000000.25, ...fields}
+
+``run`` counts resets of the simulation (a node that sees a newer run starts its tick
+count again); ``tick`` is the lockstep tick the payload belongs to; ``stamp`` is wall time
+in seconds. Field values that name scenario things (actions, intentions, drives,
+locations, object states) are checked against the scenario, so a message from a
+different world is rejected instead of misread.
+
+``decode`` raises :class:`Rejected` with a one-line reason; nodes count the reason and
+report it on ``/diagnostics`` (see ``homeo_msgs_py.diagnostics``) and keep running.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import dataclass
+from typing import Any, Callable
+
+VERSION = 1
+ENVELOPE = ("schema", "version", "run", "tick", "stamp")
+MAX_TEXT = 1 << 20  # a message longer than this is not ours
+
+
+class Rejected(ValueError):
+    """A message that is dropped; ``str()`` is the reason."""
+
+
+@dataclass(frozen=True)
+class Message:
+    schema: str
+    run: int
+    tick: int
+    stamp: float
+    fields: dict
+
+
+# -- value checks -------------------------------------------------------------
+Check = Callable[[Any, "Vocabulary", str], Any]
+
+
+def _num(lo: float, hi: float) -> Check:
+    def check(v, voc, where):
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise Rejected(f"{where} must be a number, got {type(v).__name__}")
+        if not math.isfinite(v) or not lo <= v <= hi:
+            raise Rejected(f"{where} = {v} is outside [{lo:g}, {hi:g}]")
+        return float(v)
+    return check
+
+
+def _int(lo: int, hi: int) -> Check:
+    def check(v, voc, where):
+        if isinstance(v, bool) or not isinstance(v, int):
+            raise Rejected(f"{where} must be an integer, got {type(v).__name__}")
+        if not lo <= v <= hi:
+            raise Rejected(f"{where} = {v} is outside [{lo}, {hi}]" if hi < 2**53 else f"{where} = {v} is below {lo}")
+        return v
+    return check
+
+
+def _bool(v, voc, where):
+    if not isinstance(v, bool):
+        raise Rejected(f"{where} must be true or false, got {type(v).__name__}")
+    return v
+
+
+def _str(v, voc, where):
+    if not isinstance(v, str):
+        raise Rejected(f"{where} must be a string, got {type(v).__name__}")
+    return v
+
+
+def _one_of(kind: str, nullable: bool = False) -> Check:
+    """A name from the scenario vocabulary ``kind`` (actions, intentions, ...)."""
+    def check(v, voc, where):
+        if v is None and nullable:
+            return None
+        known = voc.names(kind)
+        if not isinstance(v, str) or v not in known:
+            raise Rejected(f"{where}: unknown {kind[:-1]} {v!r}; known: {', '.join(known)}")
+        return v
+    return check
+
+
+def _feedback(v, voc, where):
+    if isinstance(v, bool) or v not in (-1, 0, 1):
+        raise Rejected(f"{where} must be +1, -1 or 0, got {v!r}")
+    return int(v)
+
+
+def _map(key_kind: str, value: Check, complete: bool = False, extra: Check | None = None) -> Check:
+    """A JSON object keyed by names of ``key_kind``; ``extra`` admits other keys (e.g. raw readings)."""
+    def check(v, voc, where):
+        if not isinstance(v, dict):
+            raise Rejected(f"{where} must be an object, got {type(v).__name__}")
+        known = voc.names(key_kind)
+        out = {}
+        for k, x in v.items():
+            if k in known:
+                out[k] = value(x, voc, f"{where}.{k}")
+            elif extra is not None:
+                out[k] = extra(x, voc, f"{where}.{k}")
+            else:
+                raise Rejected(f"{where}: unknown {key_kind[:-1]} {k!r}; known: {', '.join(known)}")
+        if complete:
+            missing = [k for k in known if k not in out]
+            if missing:
+                raise Rejected(f"{where}: missing {', '.join(missing)}")
+        return out
+    return check
+
+
+def _obj(spec: dict[str, tuple[Check, bool]]) -> Check:
+    """A nested object with named fields; ``(check, required)`` per field; no unknown keys."""
+    def check(v, voc, where):
+        if not isinstance(v, dict):
+            raise Rejected(f"{where} must be an object, got {type(v).__name__}")
+        return _fields(v, spec, voc, where)
+    return check
+
+
+def _fields(v: dict, spec, voc, where: str) -> dict:
+    out = {}
+    for k, x in v.items():
+        if k not in spec:
+            raise Rejected(f"{where}: unexpected field {k!r}")
+        out[k] = spec[k][0](x, voc, f"{where}.{k}" if where else k)
+    for k, (_, required) in spec.items():
+        if required and k not in out:
+            raise Rejected(f"{where + ': ' if where else ''}missing field {k!r}")
+    return out
+
+
+def _objects(v, voc, where):
+    """``{"charger": {"status": "idle"}, ...}``: every scenario object with every variable."""
+    if not isinstance(v, dict):
+        raise Rejected(f"{where} must be an object, got {type(v).__name__}")
+    out = {}
+    for o, vars_ in voc.object_vars.items():
+        got = v.get(o)
+        if not isinstance(got, dict):
+            raise Rejected(f"{where}: missing object {o!r}" if got is None else f"{where}.{o} must be an object")
+        out[o] = {}
+        for var, values in vars_.items():
+            x = got.get(var)
+            if x not in values:
+                raise Rejected(f"{where}.{o}.{var} = {x!r} is not one of {', '.join(values)}")
+            out[o][var] = x
+        unknown = set(got) - set(vars_)
+        if unknown:
+            raise Rejected(f"{where}.{o}: unknown variable {sorted(unknown)[0]!r}")
+    unknown = set(v) - set(voc.object_vars)
+    if unknown:
+        raise Rejected(f"{where}: unknown object {sorted(unknown)[0]!r}; known: {', '.join(voc.object_vars)}")
+    return out
+
+
+def _symbol(v, voc, where):
+    if v is not None and (not isinstance(v, str) or not v or len(v) > 64):
+        raise Rejected(f"{where} must be a short symbol or null, got {v!r}")
+    return v
+
+
+def _prob_map(kind: str) -> Check:
+    def check(v, voc, where):
+        out = _map(kind, _num(0.0, 1.0))(v, voc, where)
+        s = sum(out.values())
+        if out and abs(s - 1.0) > 1e-6:
+            raise Rejected(f"{where}: probabilities sum to {s:.6f}, not 1")
+        return out
+    return check
+
+
+def _any_json(v, voc, where):
+    return v
+
+
+DRIVE = _num(0.0, 100.0)
+ANY_NUMBER = _num(-1e9, 1e9)
+
+SCHEMAS: dict[str, dict[str, tuple[Check, bool]]] = {
+    # simulation or robot -> drives, decision: what the world looks like at the start of a tick
+    "homeo/world": {
+        "robot": (_obj({"location": (_one_of("locations"), True)}), True),
+        "objects": (_objects, True),
+        "human": (_obj({"presence": (_one_of("presences"), True), "relation": (_one_of("relations"), True)}), True),
+        # body drives by name, plus raw readings (battery_percent, temperature_status, ...)
+        "body": (_map("drives", DRIVE, extra=ANY_NUMBER), True),
+        "final": (_bool, False),  # the run ends with this tick: learn, do not act
+    },
+    # simulation or robot -> intention: what the robot sees of the human this tick
+    "homeo/observation": {
+        "intention": (_one_of("intentions", nullable=True), False),  # oracle mode: observed directly
+        "gesture": (_symbol, False),
+        "movement": (_symbol, False),
+        "keyword": (_symbol, False),
+    },
+    # intention -> drives: the recognised intention and its posterior (Eq 2.10)
+    "homeo/intention": {
+        "intention": (_one_of("intentions"), True),
+        "posterior": (_prob_map("intentions"), True),
+        "mode": (_one_of("modes"), True),
+    },
+    # drives -> decision: drives, stimuli, intensities (Eq 3.2), dominant motivation (Eq 3.3)
+    "homeo/drives": {
+        "drives": (_map("drives", DRIVE, complete=True), True),
+        "stimuli": (_map("motivations", ANY_NUMBER, complete=True), True),
+        "intensities": (_map("motivations", ANY_NUMBER, complete=True), True),
+        "m_dom": (_one_of("motivations"), True),
+        "intention": (_one_of("intentions"), True),  # the one the stimuli were computed with
+        # the world these drives were perceived in (robot, objects, human of homeo/world)
+        "world": (_obj({"robot": (_obj({"location": (_one_of("locations"), True)}), True),
+                        "objects": (_objects, True),
+                        "human": (_obj({"presence": (_one_of("presences"), True),
+                                        "relation": (_one_of("relations"), True)}), True)}), True),
+        "after_action": (_map("drives", DRIVE, complete=True), False),  # drives before the time step
+        "final": (_bool, False),
+    },
+    # decision -> simulation or robot: the chosen action (null = none) and the drives it was chosen with
+    "homeo/action": {
+        "action": (_one_of("actions", nullable=True), True),
+        "m_dom": (_one_of("motivations"), False),
+        "tau": (_num(0.0, 1e6), False),
+        "params": (_obj({"dod": (_num(0.0, 1.0), True), "xi": (_num(0.0, 1e6), True),
+                         "gamma": (_num(0.0, 1.0), True), "feedback": (_bool, True),
+                         "pseudo_update": (_bool, True)}), False),
+        "drives": (_map("drives", DRIVE, complete=True), False),  # the drives the choice was made with
+        "after_action": (_map("drives", DRIVE, complete=True), False),
+        "final": (_bool, False),  # the run ended: no action, only the last drives
+    },
+    # simulation or robot -> everyone: what the action did and what the human said
+    "homeo/outcome": {
+        "action": (_one_of("actions", nullable=True), True),
+        "feedback": (_feedback, True),
+        "proposal": (_one_of("actions", nullable=True), True),
+        "clarified_intention": (_one_of("intentions", nullable=True), True),
+        "body": (_map("drives", DRIVE, extra=ANY_NUMBER), False),  # body right after the action
+        # ground truth of the simulated human, for the metrics only (robot nodes never read it)
+        "truth": (_obj({"intention": (_one_of("intentions"), True), "expressed": (_bool, True),
+                        "satisfied": (_bool, True)}), False),
+    },
+    # simulation -> launcher: progress and, at the end, the run's metrics
+    "homeo/run_status": {
+        "iterations": (_int(0, 2**62), True),
+        "done": (_bool, True),
+        "missed": (_int(0, 2**62), True),
+        "state": (_str, True),
+        "metrics": (_any_json, False),
+        "extra": (_any_json, False),
+    },
+}
+
+
+class Vocabulary:
+    """The scenario's names that message fields may take."""
+
+    def __init__(self, sc=None, **names):
+        from homeo_decision.scenario import NONE_INTENTION, RELATIONS
+
+        self._names: dict[str, list[str]] = {"presences": ["present", "absent"], "relations": list(RELATIONS),
+                                            "modes": ["oracle", "bayes"]}
+        self.object_vars: dict[str, dict[str, list[str]]] = {}
+        if sc is not None:
+            self._names.update(actions=sc.action_names, intentions=sc.intention_names, drives=sc.drive_names,
+                               motivations=sc.motivation_names, locations=list(sc.locations))
+            self.object_vars = {o: {var: list(vals) for var, vals in spec["variables"].items()}
+                                for o, spec in sc.objects.items()}
+        else:
+            self._names.update(intentions=[NONE_INTENTION])
+        self._names.update(names)
+
+    def names(self, kind: str) -> list[str]:
+        return self._names.get(kind, [])
+
+
+def encode(schema: str, tick: int, fields: dict, run: int = 0, stamp: float | None = None) -> str:
+    """One JSON message of ``schema``; the caller's fields are trusted (nodes build them from the core)."""
+    env = {"schema": schema, "version": VERSION, "run": run, "tick": tick,
+           "stamp": time.time() if stamp is None else stamp}
+    env.update(fields)
+    return json.dumps(env, separators=(",", ":"))
+
+
+def decode(text: str, voc: Vocabulary, expect: str | None = None) -> Message:
+    """Parse and validate one message; raises :class:`Rejected` with the reason."""
+    if not isinstance(text, str):
+        raise Rejected("not a string")
+    if len(text) > MAX_TEXT:
+        raise Rejected(f"message of {len(text)} characters is too long")
+    try:
+        obj = json.loads(text)
+    except (json.JSONDecodeError, RecursionError) as exc:
+        raise Rejected(f"not JSON ({exc.msg if hasattr(exc, 'msg') else exc})") from None
+    return validate(obj, voc, expect)
+
+
+def validate(obj: Any, voc: Vocabulary, expect: str | None = None) -> Message:
+    if not isinstance(obj, dict):
+        raise Rejected(f"not a JSON object but {type(obj).__name__}")
+    schema = obj.get("schema")
+    if schema not in SCHEMAS:
+        raise Rejected(f"unknown schema {schema!r}")
+    if expect is not None and schema != expect:
+        raise Rejected(f"schema {schema!r} on a topic that carries {expect!r}")
+    if obj.get("version") != VERSION:
+        raise Rejected(f"{schema} version {obj.get('version')!r} is not {VERSION}")
+    run = _int(0, 2**62)(obj.get("run"), voc, "run")
+    tick = _int(0, 2**62)(obj.get("tick"), voc, "tick")
+    stamp = _num(0.0, 1e12)(obj.get("stamp"), voc, "stamp")
+    body = {k: v for k, v in obj.items() if k not in ENVELOPE}
+    fields = _fields(body, SCHEMAS[schema], voc, "")
+    return Message(schema, run, tick, stamp, fields)

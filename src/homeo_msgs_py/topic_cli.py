@@ -1,0 +1,323 @@
+"""``homeo-topic``: look at and poke the graph without the ``ros2`` CLI.
+
+    homeo-topic list [--wait S]
+    homeo-topic echo TOPIC [--count N] [--timeout S] [--compact]
+    homeo-topic pub TOPIC JSON [--times N] [--rate HZ] [--wait S]
+    homeo-topic param NODE NAME [VALUE]          (get, or set: VALUE is JSON, e.g. 0.3 or true)
+    homeo-topic call SERVICE                     (a std_srvs/Trigger service, e.g. /homeo_decision/save_q)
+
+All take [--scenario FILE] [--set KEY=VALUE]: the scenario that names the actions and
+intentions ``pub`` and ``echo`` check against. ``pub`` fills in what the envelope lacks
+(schema, version, run 0, tick 0, stamp now) and refuses a message the nodes would drop.
+With a full ROS 2 install, ``ros2 topic echo /homeo/drives`` and ``ros2 param set
+/homeo_decision dod 0.3`` do the same: the graph uses only std_msgs, std_srvs and
+standard parameters.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+
+from .schemas import SCHEMAS, VERSION, Rejected, Vocabulary, decode, validate
+from .topics import DIAGNOSTICS, TOPICS
+
+PROG = "homeo-topic"
+
+
+class UserError(Exception):
+    pass
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):
+        raise UserError(message)
+
+
+def _vocabulary(args) -> Vocabulary:
+    from homeo_decision.scenario import load_scenario
+
+    overrides = {}
+    for s in args.set:
+        if "=" not in s:
+            raise UserError(f"--set {s!r} is not KEY=VALUE")
+        k, v = s.split("=", 1)
+        try:
+            overrides[k] = json.loads(v)
+        except json.JSONDecodeError:
+            overrides[k] = v
+    return Vocabulary(load_scenario(args.scenario, overrides=overrides))
+
+
+class _Ros:
+    def __init__(self):
+        import rclpy
+        from rclpy.signals import SignalHandlerOptions
+
+        from homeo_sim.processes import dds_defaults
+
+        os.environ.update(dds_defaults())
+        rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+        self.rclpy = rclpy
+        self.node = rclpy.create_node(f"homeo_topic_{os.getpid()}")
+
+    def spin_for(self, seconds: float, until=None) -> bool:
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            self.rclpy.spin_once(self.node, timeout_sec=min(0.05, max(0.0, end - time.monotonic())))
+            if until is not None and until():
+                return True
+        return until() if until is not None else True
+
+    def close(self):
+        self.node.destroy_node()
+        self.rclpy.try_shutdown()
+
+
+def cmd_list(args) -> int:
+    ros = _Ros()
+    try:
+        ros.spin_for(args.wait)
+        n = ros.node
+        me = n.get_name()
+        topics = sorted(n.get_topic_names_and_types())
+        nodes = sorted(x for x in n.get_node_names() if x != me)
+        print("nodes:")
+        for name in nodes:
+            print(f"  {name}")
+        print("topics:")
+        for name, types in topics:
+            pubs = [i.node_name for i in n.get_publishers_info_by_topic(name) if i.node_name != me]
+            subs = [i.node_name for i in n.get_subscriptions_info_by_topic(name) if i.node_name != me]
+            if not pubs and not subs:
+                continue
+            schema = f"  [{TOPICS[name][0]}]" if name in TOPICS else ""
+            print(f"  {name}  {', '.join(types)}{schema}")
+            print(f"      writers: {', '.join(pubs) or '-'}   readers: {', '.join(subs) or '-'}")
+    finally:
+        ros.close()
+    return 0
+
+
+def _diag_text(msg) -> dict:
+    return {"stamp": msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9,
+            "status": [{"name": s.name, "level": int.from_bytes(s.level, "little") if isinstance(s.level, bytes)
+                        else int(s.level), "message": s.message, "values": {kv.key: kv.value for kv in s.values}}
+                       for s in msg.status]}
+
+
+def cmd_echo(args) -> int:
+    voc = _vocabulary(args)
+    ros = _Ros()
+    seen = [0]
+    try:
+        if args.topic == DIAGNOSTICS:
+            from diagnostic_msgs.msg import DiagnosticArray
+
+            def on_diag(msg):
+                seen[0] += 1
+                print(json.dumps(_diag_text(msg), indent=None if args.compact else 2), flush=True)
+
+            ros.node.create_subscription(DiagnosticArray, DIAGNOSTICS, on_diag, 10)
+        elif args.topic in TOPICS:
+            from std_msgs.msg import String
+
+            from .qos import sub_qos
+
+            schema = TOPICS[args.topic][0]
+
+            def on_msg(msg):
+                seen[0] += 1
+                try:
+                    decode(msg.data, voc, schema)
+                    note = None
+                except Rejected as exc:
+                    note = str(exc)
+                try:
+                    text = json.dumps(json.loads(msg.data), indent=None if args.compact else 2)
+                except json.JSONDecodeError:
+                    text = msg.data
+                if note:
+                    print(f"# invalid: {note}", flush=True)
+                print(text, flush=True)
+
+            ros.node.create_subscription(String, args.topic, on_msg, sub_qos(args.topic))
+        else:
+            raise UserError(f"{args.topic} is not a homeo topic; known: {', '.join([*TOPICS, DIAGNOSTICS])}")
+        end = time.monotonic() + args.timeout if args.timeout else None
+        while (not args.count or seen[0] < args.count) and (end is None or time.monotonic() < end):
+            ros.rclpy.spin_once(ros.node, timeout_sec=0.1)
+        if args.count and seen[0] < args.count:
+            print(f"{PROG}: {seen[0]} of {args.count} messages within {args.timeout:g} s", file=sys.stderr)
+            return 1
+    finally:
+        ros.close()
+    return 0
+
+
+def build_message(topic: str, text: str, voc: Vocabulary) -> str:
+    """The JSON to publish: envelope filled in, then validated as the nodes will."""
+    if topic not in TOPICS:
+        raise UserError(f"{topic} is not a homeo topic; known: {', '.join(TOPICS)}")
+    try:
+        obj = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise UserError(f"the message is not JSON: {exc.msg} at column {exc.colno}") from None
+    if not isinstance(obj, dict):
+        raise UserError("the message must be a JSON object")
+    obj.setdefault("schema", TOPICS[topic][0])
+    obj.setdefault("version", VERSION)
+    obj.setdefault("run", 0)
+    obj.setdefault("tick", 0)
+    obj.setdefault("stamp", time.time())
+    try:
+        validate(obj, voc, TOPICS[topic][0])
+    except Rejected as exc:
+        fields = ", ".join(SCHEMAS[TOPICS[topic][0]])
+        raise UserError(f"{topic} would drop this message: {exc} (fields of {TOPICS[topic][0]}: {fields})") from None
+    return json.dumps(obj)
+
+
+def cmd_pub(args) -> int:
+    voc = _vocabulary(args)
+    text = build_message(args.topic, args.json, voc)
+    from std_msgs.msg import String
+
+    from .qos import pub_qos
+
+    ros = _Ros()
+    try:
+        pub = ros.node.create_publisher(String, args.topic, pub_qos(args.topic))
+        if not ros.spin_for(args.wait, lambda: pub.get_subscription_count() > 0):
+            print(f"{PROG}: note: no reader of {args.topic} matched within {args.wait:g} s; publishing anyway",
+                  file=sys.stderr)
+        for i in range(args.times):
+            pub.publish(String(data=text))
+            if i + 1 < args.times:
+                ros.spin_for(1.0 / args.rate)
+        ros.spin_for(0.3)  # let reliable delivery finish before the publisher goes away
+        print(f"published {args.times} message{'s' if args.times != 1 else ''} on {args.topic}")
+    finally:
+        ros.close()
+    return 0
+
+
+def cmd_param(args) -> int:
+    from rcl_interfaces.srv import GetParameters, SetParameters
+    from rclpy.parameter import Parameter, parameter_value_to_python
+
+    node = args.node if args.node.startswith("/") else "/" + args.node
+    ros = _Ros()
+    try:
+        if args.value is None:
+            cli = ros.node.create_client(GetParameters, f"{node}/get_parameters")
+            req = GetParameters.Request(names=[args.name])
+        else:
+            try:
+                value = json.loads(args.value)
+            except json.JSONDecodeError:
+                value = args.value
+            cli = ros.node.create_client(SetParameters, f"{node}/set_parameters")
+            req = SetParameters.Request(parameters=[Parameter(args.name, value=value).to_parameter_msg()])
+        if not cli.wait_for_service(timeout_sec=args.wait):
+            raise UserError(f"node {node} is not running (no parameter service within {args.wait:g} s)")
+        fut = cli.call_async(req)
+        if not ros.spin_for(args.wait, fut.done):
+            raise UserError(f"{node} did not answer within {args.wait:g} s")
+        res = fut.result()
+        if args.value is None:
+            if not res.values or res.values[0].type == 0:
+                raise UserError(f"{node} has no parameter {args.name!r}")
+            print(json.dumps(parameter_value_to_python(res.values[0])))
+            return 0
+        r = res.results[0]
+        if not r.successful:
+            raise UserError(f"{node} refused {args.name}={args.value}: {r.reason}")
+        print(f"set {node} {args.name} = {args.value}")
+    finally:
+        ros.close()
+    return 0
+
+
+def cmd_call(args) -> int:
+    from std_srvs.srv import Trigger
+
+    ros = _Ros()
+    try:
+        cli = ros.node.create_client(Trigger, args.service)
+        if not cli.wait_for_service(timeout_sec=args.wait):
+            raise UserError(f"service {args.service} is not available (waited {args.wait:g} s)")
+        fut = cli.call_async(Trigger.Request())
+        if not ros.spin_for(args.wait, fut.done):
+            raise UserError(f"{args.service} did not answer within {args.wait:g} s")
+        res = fut.result()
+        print(f"{'ok' if res.success else 'failed'}: {res.message}")
+        return 0 if res.success else 1
+    finally:
+        ros.close()
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = _Parser(prog=PROG, description="Inspect the homeo graph (no ros2 CLI needed).")
+    sub = ap.add_subparsers(dest="cmd", required=True, parser_class=_Parser)
+
+    def scen(p):
+        p.add_argument("--scenario", metavar="FILE", default=None, help="scenario JSON (default: the thesis)")
+        p.add_argument("--set", metavar="KEY=VALUE", action="append", default=[], help="open-choice override")
+
+    ls = sub.add_parser("list", help="nodes and topics with their writers and readers")
+    ls.add_argument("--wait", type=float, default=2.0, help="seconds of discovery before listing (default 2)")
+    e = sub.add_parser("echo", help="print a topic's messages as JSON")
+    e.add_argument("topic")
+    e.add_argument("--count", type=int, default=0, help="stop after N messages (default: until Ctrl-C)")
+    e.add_argument("--timeout", type=float, default=0.0, help="stop after S seconds (default: never)")
+    e.add_argument("--compact", action="store_true", help="one line per message")
+    scen(e)
+    p = sub.add_parser("pub", help="validate a JSON message and publish it")
+    p.add_argument("topic")
+    p.add_argument("json")
+    p.add_argument("--times", type=int, default=1)
+    p.add_argument("--rate", type=float, default=10.0, help="messages per second with --times (default 10)")
+    p.add_argument("--wait", type=float, default=3.0, help="seconds to wait for a reader (default 3)")
+    scen(p)
+    pa = sub.add_parser("param", help="get or set a node's parameter")
+    pa.add_argument("node")
+    pa.add_argument("name")
+    pa.add_argument("value", nargs="?")
+    pa.add_argument("--wait", type=float, default=5.0)
+    c = sub.add_parser("call", help="call a std_srvs/Trigger service")
+    c.add_argument("service")
+    c.add_argument("--wait", type=float, default=5.0)
+    return ap
+
+
+def main(argv=None) -> int:
+    from homeo_decision.scenario import ScenarioError
+
+    try:
+        args = build_parser().parse_args(argv)
+        if getattr(args, "times", 1) < 1:
+            raise UserError("--times must be at least 1")
+        if getattr(args, "count", 0) < 0:
+            raise UserError("--count must be >= 0")
+        for k in ("wait", "timeout"):
+            if getattr(args, k, 0.0) < 0:
+                raise UserError(f"--{k} must be >= 0")
+        if getattr(args, "rate", 1.0) <= 0:
+            raise UserError("--rate must be positive")
+        return {"list": cmd_list, "echo": cmd_echo, "pub": cmd_pub, "param": cmd_param, "call": cmd_call}[args.cmd](args)
+    except (UserError, ScenarioError) as exc:
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+    except BrokenPipeError:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
+
+
+if __name__ == "__main__":
+    sys.exit(main())

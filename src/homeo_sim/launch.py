@@ -1,0 +1,360 @@
+"""``homeo-launch``: the whole node graph as separate processes, from one command.
+
+    homeo-launch sim [--iterations N (0 = until Ctrl-C)] [--rate HZ] [--seed S] [--dod X] [--xi X]
+                     [--no-pseudo] [--scenario FILE] [--set KEY=VALUE] [--load-q FILE] [--save-q FILE]
+                     [--trace FILE] [--json] [--quiet] [--log-dir DIR]
+    homeo-launch bench [--iterations N] [--json]
+
+``sim`` starts homeo_sim, homeo_intention, homeo_drives and homeo_decision, waits until all
+are discovered and matched, shows progress, and prints the metrics of ``homeo-sim run``
+(the same JSON with ``--json``). Ctrl-C stops every node; a node that dies is named with
+its exit code and the rest are stopped.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from dataclasses import dataclass
+
+from homeo_decision.qtable_io import QTableError
+from homeo_decision.scenario import ScenarioError
+from homeo_msgs_py.topics import ACTION, DRIVES, INTENTION, OBSERVATION, OUTCOME, RUN_STATUS, SIM_NODES, WORLD
+
+from .cli import UserError, _float_in, _int_at_least, _Parser, _setting, format_table
+from .processes import Graph, NodeSpec, dds_defaults, graph_env
+from .stats import aggregate, json_safe
+
+PROG = "homeo-launch"
+DISCOVERY_TIMEOUT_S = 60.0
+# (writers, readers) each topic has in the simulated graph
+EXPECTED_ENDPOINTS = {WORLD: (1, 1), OBSERVATION: (1, 1), INTENTION: (1, 1), DRIVES: (1, 1), ACTION: (1, 1),
+                      OUTCOME: (1, 2)}
+MODULES = {"homeo_sim": "homeo_sim.node", "homeo_intention": "homeo_intention.node",
+           "homeo_drives": "homeo_decision.drives_node", "homeo_decision": "homeo_decision.node"}
+
+
+class GraphError(Exception):
+    """The graph failed: a node died or never came up. Exit code 1."""
+
+
+@dataclass
+class SimOptions:
+    iterations: int = 5000
+    rate: float = 0.0
+    seed: int = 0
+    dod: float | None = None
+    xi: float | None = None
+    pseudo_update: bool | None = None
+    scenario: str | None = None
+    overrides: tuple = ()
+    load_q: str | None = None
+    save_q: str | None = None
+    trace: str | None = None
+    action_timeout: float = 5.0
+
+
+def sim_specs(o: SimOptions) -> list[NodeSpec]:
+    common = {"scenario": o.scenario or "", "overrides": json.dumps(dict(o.overrides))}
+    decision = dict(common, seed=o.seed)
+    for k, v in (("dod", o.dod), ("xi", o.xi)):
+        if v is not None:
+            decision[k] = float(v)
+    if o.pseudo_update is not None:
+        decision["pseudo_update"] = bool(o.pseudo_update)
+    q_path = o.save_q or o.load_q
+    if q_path:
+        decision["q_table_path"] = os.path.abspath(q_path)
+    if o.load_q:
+        decision["load_on_start"] = True
+        if o.save_q and o.save_q != o.load_q:
+            decision["q_table_path"] = os.path.abspath(o.load_q)  # switched to save_q before saving
+    sim = dict(common, seed=o.seed, iterations=o.iterations, rate=float(o.rate),
+               action_timeout=float(o.action_timeout), trace_path=os.path.abspath(o.trace) if o.trace else "")
+    return [NodeSpec("homeo_sim", MODULES["homeo_sim"], sim),
+            NodeSpec("homeo_intention", MODULES["homeo_intention"], dict(common)),
+            NodeSpec("homeo_drives", MODULES["homeo_drives"], dict(common)),
+            NodeSpec("homeo_decision", MODULES["homeo_decision"], decision)]
+
+
+class Monitor:
+    """The launcher's own node: watches discovery, /homeo/run_status, and calls services."""
+
+    def __init__(self):
+        import rclpy
+        from rclpy.signals import SignalHandlerOptions
+        from std_msgs.msg import String
+
+        from homeo_msgs_py.qos import sub_qos
+        from homeo_msgs_py.schemas import Rejected, Vocabulary, decode
+
+        rclpy.init(signal_handler_options=SignalHandlerOptions.NO)  # Ctrl-C stays a KeyboardInterrupt here
+        self.rclpy = rclpy
+        self.node = rclpy.create_node("homeo_launch")
+        self.status = None
+        voc = Vocabulary()
+
+        def on_status(msg: String) -> None:
+            try:
+                self.status = decode(msg.data, voc, "homeo/run_status")
+            except Rejected:
+                pass
+
+        self.node.create_subscription(String, RUN_STATUS, on_status, sub_qos(RUN_STATUS))
+
+    def spin(self, timeout: float = 0.05) -> None:
+        self.rclpy.spin_once(self.node, timeout_sec=timeout)
+
+    def missing(self, nodes, endpoints) -> list[str]:
+        present = set(self.node.get_node_names())
+        out = [f"node {n}" for n in nodes if n not in present]
+        for topic, (w, r) in endpoints.items():
+            nw, nr = self.node.count_publishers(topic), self.node.count_subscribers(topic)
+            if nw < w:
+                out.append(f"{topic}: {nw}/{w} writers")
+            if nr < r:
+                out.append(f"{topic}: {nr}/{r} readers")
+        return out
+
+    def call_trigger(self, service: str, timeout: float = 10.0) -> tuple[bool, str]:
+        from std_srvs.srv import Trigger
+
+        cli = self.node.create_client(Trigger, service)
+        try:
+            if not cli.wait_for_service(timeout_sec=timeout):
+                return False, f"service {service} is not available"
+            fut = cli.call_async(Trigger.Request())
+            end = time.monotonic() + timeout
+            while not fut.done() and time.monotonic() < end:
+                self.spin(0.05)
+            if not fut.done():
+                return False, f"service {service} did not answer within {timeout:g} s"
+            res = fut.result()
+            return res.success, res.message
+        finally:
+            self.node.destroy_client(cli)
+
+    def close(self) -> None:
+        self.node.destroy_node()
+        self.rclpy.try_shutdown()
+
+
+def wait_until_up(graph: Graph, mon: Monitor, nodes, endpoints, bound: float) -> None:
+    end = time.monotonic() + bound
+    while True:
+        _check_alive(graph)
+        missing = mon.missing(nodes, endpoints)
+        if not missing:
+            return
+        if time.monotonic() > end:
+            raise GraphError(f"the graph did not come up within {bound:g} s; missing: {'; '.join(missing)}")
+        mon.spin(0.1)
+
+
+def _check_alive(graph: Graph) -> None:
+    dead = graph.dead()
+    if dead:
+        name, code = dead
+        tail = graph.log_tail(name)
+        raise GraphError(f"node {name} exited with code {code}" + (f"; its last output:\n{tail}" if tail else ""))
+
+
+def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on_progress=None,
+              discovery_timeout: float = DISCOVERY_TIMEOUT_S, last: dict | None = None) -> dict:
+    """Run the simulated graph to the end; returns the last run status fields (metrics included)
+    plus ``elapsed_s`` (first tick to done) and ``rss_mb``. Raises GraphError or KeyboardInterrupt."""
+    env = graph_env()
+    os.environ.update(dds_defaults())  # the launcher's own node too
+    graph = Graph(sim_specs(o), env, log_dir)
+    mon = None
+    try:
+        graph.start()
+        mon = Monitor()
+        wait_until_up(graph, mon, SIM_NODES, EXPECTED_ENDPOINTS, discovery_timeout)
+        t_start = None
+        last_tick = -1
+        while True:
+            mon.spin(0.05)
+            _check_alive(graph)
+            st = mon.status
+            if st is None:
+                continue
+            if t_start is None and st.fields["state"] in ("running", "finishing", "done"):
+                t_start = time.monotonic()
+            if st.tick != last_tick:
+                last_tick = st.tick
+                if last is not None:
+                    last.update(st.fields)
+                if on_progress is not None:
+                    on_progress(st.tick, st.fields)
+            if st.fields["done"]:
+                break
+        out = dict(mon.status.fields)
+        out["elapsed_s"] = (out.get("extra") or {}).get("elapsed_s", time.monotonic() - t_start)
+        out["rss_mb"] = graph.rss_mb()
+        if o.save_q:
+            ok, msg = True, ""
+            if o.load_q and o.save_q != o.load_q:
+                ok, msg = _set_param(mon, "/homeo_decision", "q_table_path", os.path.abspath(o.save_q))
+            if ok:
+                ok, msg = mon.call_trigger("/homeo_decision/save_q")
+            if not ok:
+                raise GraphError(f"saving the Q-table failed: {msg}")
+        return out
+    finally:
+        if mon is not None:
+            mon.close()
+        codes = graph.stop()
+        graph.close()
+        if not quiet and any(c not in (0, None, -2, 130) for c in codes.values()):
+            bad = ", ".join(f"{n}={c}" for n, c in codes.items() if c not in (0, None, -2, 130))
+            print(f"{PROG}: note: nodes stopped with exit codes {bad}", file=sys.stderr)
+
+
+def _set_param(mon: Monitor, node: str, name: str, value) -> tuple[bool, str]:
+    from rcl_interfaces.srv import SetParameters
+    from rclpy.parameter import Parameter
+
+    cli = mon.node.create_client(SetParameters, f"{node}/set_parameters")
+    try:
+        if not cli.wait_for_service(timeout_sec=10.0):
+            return False, f"{node}/set_parameters is not available"
+        req = SetParameters.Request(parameters=[Parameter(name, value=value).to_parameter_msg()])
+        fut = cli.call_async(req)
+        end = time.monotonic() + 10.0
+        while not fut.done() and time.monotonic() < end:
+            mon.spin(0.05)
+        if not fut.done():
+            return False, "set_parameters did not answer"
+        r = fut.result().results[0]
+        return r.successful, r.reason
+    finally:
+        mon.node.destroy_client(cli)
+
+
+# -- command line -----------------------------------------------------------------------------
+def build_parser() -> argparse.ArgumentParser:
+    ap = _Parser(prog=PROG, description="Start the homeostatic robot's ROS 2 node graph.")
+    sub = ap.add_subparsers(dest="cmd", required=True, parser_class=_Parser)
+    s = sub.add_parser("sim", help="the graph with the simulated world and human; prints Table 4.5's metrics")
+    s.add_argument("--iterations", type=_int_at_least(0), default=5000, help="ticks (0 = until Ctrl-C; default 5000)")
+    s.add_argument("--rate", type=_float_in(0.0, 1000.0), default=0.0, help="ticks per second (0 = as fast as lockstep allows)")
+    s.add_argument("--seed", type=_int_at_least(0), default=0, help="seed of every component (default 0)")
+    s.add_argument("--dod", type=_float_in(0.0, 1.0), default=None, help="Degree of Dedication (Eq 3.27)")
+    s.add_argument("--xi", type=_float_in(0.0, 1000.0), default=None, help="motivation factor xi (Eq 3.20)")
+    s.add_argument("--no-pseudo", action="store_true", help="switch off pseudo updates (Eq 3.23)")
+    s.add_argument("--scenario", metavar="FILE", default=None, help="scenario JSON (default: the thesis scenario)")
+    s.add_argument("--set", metavar="KEY=VALUE", type=_setting, action="append", default=[],
+                   help="override an open choice of the scenario")
+    s.add_argument("--load-q", metavar="FILE", help="start from a saved Q-table")
+    s.add_argument("--save-q", metavar="FILE", help="save the Q-table at the end")
+    s.add_argument("--trace", metavar="FILE", help="the simulation writes one JSON line per tick")
+    s.add_argument("--action-timeout", type=_float_in(0.01, 3600.0), default=5.0,
+                   help="seconds to wait for an action before the tick counts as none (default 5)")
+    s.add_argument("--log-dir", metavar="DIR", help="keep each node's log here (default: a temporary directory)")
+    s.add_argument("--json", action="store_true", help="print the metrics as homeo-sim run --json does")
+    s.add_argument("--quiet", action="store_true", help="no progress bar")
+    b = sub.add_parser("bench", help="seconds per tick of the graph against a raw rclpy chain (the floor)")
+    b.add_argument("--iterations", type=_int_at_least(10), default=2000, help="ticks of each (default 2000)")
+    b.add_argument("--json", action="store_true")
+    return ap
+
+
+def options_from_args(a) -> SimOptions:
+    from homeo_decision.scenario import load_scenario
+
+    for f in (a.load_q,):
+        if f and not os.path.isfile(f):
+            raise UserError(f"Q-table file not found: {f}")
+    if a.trace and os.path.dirname(os.path.abspath(a.trace)) and not os.path.isdir(os.path.dirname(os.path.abspath(a.trace))):
+        raise UserError(f"--trace {a.trace}: the directory does not exist")
+    load_scenario(a.scenario, overrides=dict(a.set))  # a bad scenario is a one-line error here, not in four nodes
+    return SimOptions(iterations=a.iterations, rate=a.rate, seed=a.seed, dod=a.dod, xi=a.xi,
+                      pseudo_update=False if a.no_pseudo else None, scenario=a.scenario, overrides=tuple(a.set),
+                      load_q=a.load_q, save_q=a.save_q, trace=a.trace, action_timeout=a.action_timeout)
+
+
+def cmd_sim(a) -> int:
+    from homeo_decision.scenario import load_scenario
+
+    o = options_from_args(a)
+    sc = load_scenario(o.scenario, overrides=dict(o.overrides))
+    bar = None
+    if not a.quiet:
+        from tqdm import tqdm
+
+        bar = tqdm(total=o.iterations or None, unit="tick", file=sys.stderr, leave=False, dynamic_ncols=True,
+                   desc="graph")
+
+    def progress(tick, fields):
+        if bar is not None:
+            bar.n = tick
+            bar.set_postfix_str(fields["state"] + (f", {fields['missed']} missed" if fields["missed"] else ""),
+                                refresh=False)
+            bar.refresh()
+
+    last: dict = {}
+    status = None
+    try:
+        status = run_graph(o, quiet=a.quiet, log_dir=a.log_dir, on_progress=progress, last=last)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        if bar is not None:
+            bar.close()
+    if status is None:  # Ctrl-C: the nodes are stopped; show what the run measured so far
+        print(f"{PROG}: interrupted; all nodes stopped", file=sys.stderr)
+        if not last.get("metrics"):
+            return 130
+        print(f"{PROG}: metrics of the run so far:", file=sys.stderr)
+        status = dict(last, elapsed_s=float("nan"), rss_mb=float("nan"))
+        code = 0 if o.iterations == 0 else 130
+    else:
+        code = 0
+    metrics = aggregate([status["metrics"]], sc.drive_names)
+    out = {"iterations": o.iterations, "seeds": [o.seed], "metrics": metrics}
+    if a.json:
+        print(json.dumps(json_safe(out)))
+    else:
+        print(format_table(out, sc.drive_names, sc.name))
+        print(f"graph: {status['elapsed_s']:.1f} s for {o.iterations} ticks "
+              f"({status['elapsed_s'] / max(1, o.iterations) * 1e3:.2f} ms/tick), {status['missed']} missed, "
+              f"{status['rss_mb']:.0f} MiB resident")
+    return code
+
+
+def _sigterm_as_interrupt(signum, frame):
+    raise KeyboardInterrupt  # `kill` or a CI timeout stops the nodes as Ctrl-C does
+
+
+def main(argv=None) -> int:
+    import signal
+
+    signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
+    ap = build_parser()
+    try:
+        args = ap.parse_args(argv)
+        if args.cmd == "sim":
+            return cmd_sim(args)
+        from .graph_bench import cmd_bench
+
+        return cmd_bench(args)
+    except (UserError, ScenarioError, QTableError) as exc:
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        return 2
+    except GraphError as exc:
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        return 1
+    except BrokenPipeError:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,134 @@
+"""Starting and stopping a graph of node processes (no rclpy here).
+
+Each node runs as ``python -m MODULE --ros-args --params-file FILE`` in its own session,
+so a Ctrl-C at the terminal reaches the launcher alone and the launcher stops the nodes
+in order. Nodes also get PR_SET_PDEATHSIG (``HOMEO_PARENT_PID``) so they cannot outlive a
+launcher that was killed outright. Each node's output goes to a log file; when a node
+dies, the launcher shows its last lines.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+STOP_GRACE_S = 3.0  # SIGINT, then SIGTERM, then SIGKILL: the whole stop stays under 5 s
+
+
+@dataclass
+class NodeSpec:
+    name: str  # the ROS node name, also the log file's name
+    module: str  # python -m MODULE
+    params: dict = field(default_factory=dict)
+    args: list = field(default_factory=list)  # extra command-line arguments before --ros-args
+
+
+def dds_defaults(env=os.environ) -> dict:
+    """DDS settings of the project, each unless the user set it: discovery on this machine only,
+    and Fast DDS over UDP on loopback rather than shared memory, whose segments a killed process
+    leaves behind in /dev/shm (and later processes then print lock errors on stdout)."""
+    return {k: env.get(k, v) for k, v in (("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST"),
+                                          ("FASTDDS_BUILTIN_TRANSPORTS", "UDPv4"))}
+
+
+def graph_env(domain_id: int | None = None) -> dict:
+    """The environment of a graph: discovery kept on this machine unless the user chose otherwise."""
+    env = dict(os.environ)
+    env.update(dds_defaults(env))
+    if domain_id is not None:
+        env["ROS_DOMAIN_ID"] = str(domain_id)
+    env["PYTHONUNBUFFERED"] = "1"
+    return env
+
+
+class Graph:
+    def __init__(self, specs: list[NodeSpec], env: dict | None = None, log_dir: str | None = None):
+        self.specs = specs
+        self.env = dict(env or graph_env())
+        self.env["HOMEO_PARENT_PID"] = str(os.getpid())
+        self._tmp = None
+        if log_dir is None:
+            self._tmp = tempfile.TemporaryDirectory(prefix="homeo-graph-")
+            log_dir = self._tmp.name
+        self.log_dir = Path(log_dir)
+        self.log_dir.mkdir(parents=True, exist_ok=True)
+        self.procs: dict[str, subprocess.Popen] = {}
+
+    def start(self) -> None:
+        for s in self.specs:
+            pfile = self.log_dir / f"{s.name}.params.json"
+            # JSON is YAML: rcl reads it as a parameters file; strings stay strings
+            pfile.write_text(json.dumps({s.name: {"ros__parameters": s.params}}))
+            cmd = [sys.executable, "-m", s.module, *s.args, "--ros-args", "--params-file", str(pfile)]
+            log = open(self.log_dir / f"{s.name}.log", "wb")
+            self.procs[s.name] = subprocess.Popen(cmd, env=self.env, stdin=subprocess.DEVNULL, stdout=log,
+                                                  stderr=subprocess.STDOUT, start_new_session=True)
+            log.close()
+
+    def pids(self) -> dict[str, int]:
+        return {n: p.pid for n, p in self.procs.items()}
+
+    def dead(self) -> tuple[str, int] | None:
+        """The first node that has exited, with its exit code."""
+        for n, p in self.procs.items():
+            code = p.poll()
+            if code is not None:
+                return n, code
+        return None
+
+    def log_tail(self, name: str, lines: int = 12) -> str:
+        try:
+            text = (self.log_dir / f"{name}.log").read_text(errors="replace")
+        except OSError:
+            return ""
+        return "\n".join(text.rstrip().splitlines()[-lines:])
+
+    def rss_mb(self) -> float:
+        """Resident memory of all node processes, in MiB (from /proc)."""
+        total = 0
+        for p in self.procs.values():
+            try:
+                for line in Path(f"/proc/{p.pid}/status").read_text().splitlines():
+                    if line.startswith("VmRSS:"):
+                        total += int(line.split()[1])
+            except (OSError, ValueError):
+                pass
+        return total / 1024.0
+
+    def stop(self) -> dict[str, int | None]:
+        """SIGINT every node, then SIGTERM / SIGKILL the ones that linger; returns exit codes."""
+        live = [p for p in self.procs.values() if p.poll() is None]
+        for p in live:
+            _signal(p, signal.SIGINT)
+        deadline = time.monotonic() + STOP_GRACE_S
+        for sig, until in ((signal.SIGTERM, deadline), (signal.SIGKILL, deadline + 1.0)):
+            for p in live:
+                try:
+                    p.wait(timeout=max(0.0, until - time.monotonic()))
+                except subprocess.TimeoutExpired:
+                    _signal(p, sig)
+        for p in live:
+            try:
+                p.wait(timeout=1.0)
+            except subprocess.TimeoutExpired:
+                pass
+        return {n: p.returncode for n, p in self.procs.items()}
+
+    def close(self) -> None:
+        if self._tmp is not None:
+            self._tmp.cleanup()
+            self._tmp = None
+
+
+def _signal(p: subprocess.Popen, sig: int) -> None:
+    try:
+        os.killpg(p.pid, sig)  # the node's whole session: nothing it started survives
+    except (ProcessLookupError, PermissionError):
+        pass

@@ -1,0 +1,111 @@
+"""Helpers for tests that start node processes: a fresh ROS_DOMAIN_ID each, a probe node
+in the test process, bounded waits. Everything stays on loopback."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import os
+import time
+from contextlib import contextmanager
+
+from homeo_sim.processes import dds_defaults
+
+os.environ.update(dds_defaults())  # before any rclpy context of the test process
+
+# domain ids 0..232 are valid; spread parallel pytest sessions by pid
+_DOMAINS = itertools.count(100 + (os.getpid() % 40) * 3)
+
+
+def fresh_domain() -> int:
+    d = next(_DOMAINS)
+    return 100 + (d - 100) % 130
+
+
+class Probe:
+    """An rclpy node in the test process, on the test's own domain."""
+
+    def __init__(self, domain: int):
+        import rclpy
+        from rclpy.context import Context
+
+        self.rclpy = rclpy
+        self.ctx = Context()
+        rclpy.init(context=self.ctx, domain_id=domain)
+        from rclpy.executors import SingleThreadedExecutor
+
+        self.node = rclpy.create_node(f"probe_{os.getpid()}", context=self.ctx)
+        self.ex = SingleThreadedExecutor(context=self.ctx)
+        self.ex.add_node(self.node)
+
+    def spin_until(self, cond, timeout: float) -> bool:
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            if cond():
+                return True
+            self.ex.spin_once(timeout_sec=0.05)
+        return cond()
+
+    def collect(self, topic: str) -> list:
+        """Decoded JSON of every message on a homeo topic, appended as they arrive."""
+        from std_msgs.msg import String
+
+        from homeo_msgs_py.qos import sub_qos
+
+        got: list = []
+        self.node.create_subscription(String, topic, lambda m: got.append(json.loads(m.data)), sub_qos(topic))
+        return got
+
+    def diagnostics(self) -> dict:
+        """Latest DiagnosticStatus per status name, as plain dicts."""
+        from diagnostic_msgs.msg import DiagnosticArray
+
+        latest: dict = {}
+
+        def cb(arr):
+            for s in arr.status:
+                latest[s.name] = {"message": s.message, "values": {kv.key: kv.value for kv in s.values}}
+
+        self.node.create_subscription(DiagnosticArray, "/diagnostics", cb, 50)
+        return latest
+
+    def publisher(self, topic: str):
+        from std_msgs.msg import String
+
+        from homeo_msgs_py.qos import pub_qos
+
+        pub = self.node.create_publisher(String, topic, pub_qos(topic))
+        return lambda text: pub.publish(String(data=text))
+
+    def call(self, srv_type, name: str, request, timeout: float = 20.0):
+        cli = self.node.create_client(srv_type, name)
+        assert self.spin_until(lambda: cli.service_is_ready(), timeout), f"service {name} never came up"
+        fut = cli.call_async(request)
+        assert self.spin_until(fut.done, timeout), f"{name} did not answer"
+        return fut.result()
+
+    def set_param(self, node: str, name: str, value, timeout: float = 20.0):
+        from rcl_interfaces.srv import SetParameters
+        from rclpy.parameter import Parameter
+
+        req = SetParameters.Request(parameters=[Parameter(name, value=value).to_parameter_msg()])
+        return self.call(SetParameters, f"{node}/set_parameters", req, timeout).results[0]
+
+    def close(self):
+        self.node.destroy_node()
+        self.rclpy.try_shutdown(context=self.ctx)
+
+
+@contextmanager
+def sim_graph(opts, domain: int):
+    """The four simulation nodes as processes on ``domain``; stopped and checked on exit."""
+    from homeo_sim.launch import sim_specs
+    from homeo_sim.processes import Graph, graph_env
+
+    g = Graph(sim_specs(opts), graph_env(domain))
+    g.start()
+    try:
+        yield g
+    finally:
+        g.stop()
+        g.close()

@@ -1,0 +1,136 @@
+"""The message contract (homeo_msgs_py): schemas, validation reasons, the tick join."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from homeo_decision.perception import world_fields
+from homeo_msgs_py.lockstep import TickJoin
+from homeo_msgs_py.schemas import Message, Rejected, Vocabulary, decode, encode
+from homeo_msgs_py.diagnostics import RejectLog
+from homeo_msgs_py.topics import TOPICS
+
+
+@pytest.fixture(scope="module")
+def voc(thesis):
+    return Vocabulary(thesis)
+
+
+def _world(thesis) -> dict:
+    w = world_fields(thesis, thesis.encode({"robot.location": "R", "human.presence": "present", "intention": "none",
+                                            "charger.status": "idle", "player.status": "idle",
+                                            "light.status": "off"}))
+    w["body"] = {"NRes": 12.0, "NEng": 40.0, "battery_percent": 60}
+    return w
+
+
+def test_round_trip_keeps_fields_and_envelope(thesis, voc):
+    text = encode("homeo/world", 7, _world(thesis), run=2, stamp=123.5)
+    m = decode(text, voc, "homeo/world")
+    assert (m.schema, m.run, m.tick, m.stamp) == ("homeo/world", 2, 7, 123.5)
+    assert m.fields["human"] == {"presence": "present", "relation": "far"}  # robot at R, human at H
+    assert m.fields["body"]["NEng"] == 40.0 and m.fields["body"]["battery_percent"] == 60.0
+
+
+def test_floats_survive_json_exactly(voc):
+    x = 0.1 + 0.2  # not representable in short decimal form
+    text = encode("homeo/action", 0, {"action": "Chat", "tau": x})
+    assert decode(text, voc).fields["tau"] == x
+
+
+def _action(**over):
+    obj = {"schema": "homeo/action", "version": 1, "run": 0, "tick": 3, "stamp": 1.0, "action": "Chat"}
+    obj.update(over)
+    return json.dumps(obj)
+
+
+@pytest.mark.parametrize("text, reason", [
+    ("not json {", "not JSON"),
+    ("[1, 2]", "not a JSON object"),
+    (_action(schema="homeo/nope"), "unknown schema"),
+    (_action(version=2), "version 2"),
+    (_action(action="Dance"), "unknown action 'Dance'"),
+    (_action(tick=-1), "tick = -1 is below 0"),
+    (_action(tick="3"), "tick must be an integer"),
+    (_action(tau=float("inf")), "tau"),
+    (_action(extra=1), "unexpected field 'extra'"),
+    (json.dumps({"schema": "homeo/action", "version": 1, "run": 0, "tick": 0, "stamp": 1.0}), "missing field 'action'"),
+])
+def test_bad_messages_are_rejected_with_a_reason(voc, text, reason):
+    with pytest.raises(Rejected) as exc:
+        decode(text, voc, "homeo/action")
+    assert reason in str(exc.value)
+
+
+def test_wrong_schema_on_a_topic(voc):
+    with pytest.raises(Rejected, match="on a topic that carries 'homeo/drives'"):
+        decode(_action(), voc, "homeo/drives")
+
+
+def test_scenario_values_are_checked(thesis, voc):
+    w = _world(thesis)
+    w["objects"]["light"]["status"] = "dim"
+    with pytest.raises(Rejected, match=r"objects.light.status = 'dim' is not one of off, on"):
+        decode(encode("homeo/world", 0, w), voc)
+    w = _world(thesis)
+    w["body"]["NEng"] = 140.0
+    with pytest.raises(Rejected, match=r"body.NEng = 140.0 is outside \[0, 100\]"):
+        decode(encode("homeo/world", 0, w), voc)
+    with pytest.raises(Rejected, match="unknown intention 'dance'"):
+        decode(encode("homeo/intention", 0, {"intention": "dance", "posterior": {}, "mode": "oracle"}), voc)
+    with pytest.raises(Rejected, match="sum to 0.500000"):
+        decode(encode("homeo/intention", 0, {"intention": "come", "posterior": {"come": 0.5}, "mode": "oracle"}), voc)
+    with pytest.raises(Rejected, match=r"feedback must be \+1, -1 or 0"):
+        decode(encode("homeo/outcome", 0, {"action": None, "feedback": 2, "proposal": None,
+                                           "clarified_intention": None}), voc)
+
+
+def test_every_topic_has_a_schema():
+    from homeo_msgs_py.schemas import SCHEMAS
+
+    assert {s for s, _ in TOPICS.values()} <= set(SCHEMAS)
+
+
+def _m(tick, run=0):
+    return Message("x", run, tick, 0.0, {})
+
+
+def test_join_waits_for_every_input_in_any_order():
+    j = TickJoin({"world": 0, "intention": 0, "outcome": -1})
+    assert j.put("intention", _m(0)) == []
+    done = j.put("world", _m(0))  # tick 0 needs no outcome
+    assert [k for k, _ in done] == [0]
+    assert j.put("world", _m(1)) == []
+    assert j.put("outcome", _m(0)) == []  # outcome of tick 0 belongs to tick 1
+    done = j.put("intention", _m(1))
+    assert [k for k, _ in done] == [1] and set(done[0][1]) == {"world", "intention", "outcome"}
+
+
+def test_join_rejects_stale_future_and_duplicate_ticks_and_follows_a_new_run():
+    j = TickJoin({"world": 0})
+    j.put("world", _m(0))
+    with pytest.raises(Rejected, match="stale tick 0"):
+        j.put("world", _m(0))
+    with pytest.raises(Rejected, match="ahead of the run"):
+        j.put("world", _m(50))
+    j2 = TickJoin({"world": 0, "intention": 0})
+    j2.put("world", _m(0))
+    with pytest.raises(Rejected, match="duplicate world"):
+        j2.put("world", _m(0))
+    # a reset of the simulation: run 1 starts again at tick 0
+    assert [k for k, _ in j.put("world", _m(0, run=1))] == [0]
+    with pytest.raises(Rejected, match="stale run 0"):
+        j.put("world", _m(1, run=0))
+
+
+def test_reject_log_reports_counts_and_last_reason():
+    log = RejectLog("homeo_x")
+    assert log.status()["level"] == 0
+    log.reject("/homeo/action", "not JSON")
+    log.reject("/homeo/action", "unknown action 'Dance'")
+    st = log.status()
+    assert st["level"] == 1 and "dropped 2 bad messages" in st["message"]
+    assert st["values"]["rejected /homeo/action"] == "2"
+    assert st["values"]["last reason /homeo/action"] == "unknown action 'Dance'"
