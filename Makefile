@@ -15,6 +15,7 @@ $(STAMP): pyproject.toml requirements.lock
 	touch $(STAMP)
 
 run: setup
+	$(BIN)/homeo-launch sim --iterations 5000 --seed 0 --save-q out/q-seed0.json
 	$(BIN)/homeo-sim run --iterations 5000 --seeds 20
 
 test: setup
@@ -22,6 +23,7 @@ test: setup
 
 bench: setup
 	$(BIN)/homeo-sim bench
+	$(BIN)/homeo-launch bench
 
 report: setup
 	$(BIN)/homeo-sim report --out out/report --seeds 10

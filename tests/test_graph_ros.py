@@ -39,16 +39,18 @@ def _status_tick(status: list) -> int:
 
 
 # -- equivalence --------------------------------------------------------------------------------
-def test_launcher_prints_exactly_the_in_process_metrics_and_the_same_actions(tmp_path):
+@pytest.mark.parametrize("intention", ["oracle", "bayes"])
+def test_launcher_prints_exactly_the_in_process_metrics_and_the_same_actions(tmp_path, intention):
     n, seed = 300, 4
     d = fresh_domain()
     g = _cli("homeo_sim.launch", "sim", "--iterations", str(n), "--seed", str(seed), "--json", "--quiet",
-             "--trace", str(tmp_path / "graph.jsonl"), domain=d)
+             "--intention", intention, "--trace", str(tmp_path / "graph.jsonl"), domain=d)
     assert g.returncode == 0, g.stderr
     p = _cli("homeo_sim.cli", "run", "--iterations", str(n), "--seed", str(seed), "--json", "--quiet",
-             "--trace", str(tmp_path / "proc.jsonl"), domain=d)
+             "--intention", intention, "--trace", str(tmp_path / "proc.jsonl"), domain=d)
     assert p.returncode == 0, p.stderr
     assert g.stdout == p.stdout  # the very same JSON text
+    assert ("intention_accuracy" in g.stdout) == (intention == "bayes")
     ga = [json.loads(x)["action"] for x in (tmp_path / "graph.jsonl").read_text().splitlines()]
     pa = [json.loads(x)["action"] for x in (tmp_path / "proc.jsonl").read_text().splitlines()]
     assert len(ga) == n and ga == pa
@@ -143,9 +145,9 @@ def test_garbage_on_every_input_topic_is_rejected_and_reported_while_the_run_goe
     from homeo_msgs_py.topics import TOPICS
 
     inputs = {  # topic -> the nodes that read it
-        "/homeo/action": ["homeo_sim"], "/homeo/drives": ["homeo_sim", "homeo_decision"],
+        "/homeo/action": ["homeo_sim"], "/homeo/drives": ["homeo_decision"],
         "/homeo/world": ["homeo_drives"], "/homeo/observation": ["homeo_intention"],
-        "/homeo/intention": ["homeo_drives"], "/homeo/outcome": ["homeo_drives", "homeo_decision"],
+        "/homeo/intention": ["homeo_drives"], "/homeo/outcome": ["homeo_drives"],
     }
     d = fresh_domain()
     with sim_graph(SimOptions(iterations=0, rate=50.0), d):

@@ -14,7 +14,7 @@ import pytest
 from homeo_decision.agent import DecisionCore
 from homeo_decision.drive_tracker import DrivesStage
 from homeo_decision.robot_step import DecisionStage
-from homeo_intention.oracle import OracleStage
+from homeo_intention.stage import RecogniserStage
 from homeo_msgs_py.lockstep import TickJoin
 from homeo_msgs_py.schemas import Vocabulary, decode, encode
 from homeo_sim.runner import RunConfig, run_episode
@@ -43,16 +43,17 @@ class Bus:
         return out
 
 
-def run_bus_graph(sc, seed: int, iterations: int, shuffle_seed: int = 0):
+def run_bus_graph(sc, seed: int, iterations: int, shuffle_seed: int = 0, mode: str = "oracle"):
     voc = Vocabulary(sc)
     bus = Bus(voc, shuffle_seed)
     sim = SimCore(sc, seed)
-    intent = OracleStage(sc)
+    intent = RecogniserStage(sc, mode)
+    sim.intention_accuracy = mode == "bayes"
     drives = DrivesStage(sc)
     decision = DecisionStage(DecisionCore(sc, seed))
-    j_int = TickJoin({"observation": 0})
+    j_int = TickJoin({"observation": 0, "outcome": -1} if intent.learns else {"observation": 0})
     j_drv = TickJoin({"world": 0, "intention": 0, "outcome": -1})
-    j_dec = TickJoin({"drives": 0, "outcome": -1})
+    j_dec = TickJoin({"drives": 0})
     actions = []
     bus.send("obs", "homeo/observation", 0, sim.observation_msg())
     bus.send("world", "homeo/world", 0, sim.world_msg())
@@ -61,26 +62,25 @@ def run_bus_graph(sc, seed: int, iterations: int, shuffle_seed: int = 0):
         for topic, m in bus.drain():
             if topic == "obs":
                 for k, inp in j_int.put("observation", m):
-                    bus.send("intention", "homeo/intention", k, intent.tick(inp["observation"].fields))
+                    out = inp.get("outcome")
+                    bus.send("intention", "homeo/intention", k, intent.tick(inp["observation"].fields,
+                                                                            out.fields if out else None))
             elif topic in ("world", "intention"):
                 for k, inp in j_drv.put(topic, m):
                     out = inp.get("outcome")
                     bus.send("drives", "homeo/drives", k, drives.tick(inp["world"].fields, inp["intention"].fields["intention"],
                                                                       out.fields if out else None))
             elif topic == "outcome":
-                for name, j in (("drv", j_drv), ("dec", j_dec)):
-                    for k, inp in j.put("outcome", m):
-                        if name == "drv":
-                            bus.send("drives", "homeo/drives", k, drives.tick(
-                                inp["world"].fields, inp["intention"].fields["intention"], inp["outcome"].fields))
-                        else:
-                            bus.send("action", "homeo/action", k, decision.tick(k, inp["drives"].fields,
+                if intent.learns:
+                    for k, inp in j_int.put("outcome", m):
+                        bus.send("intention", "homeo/intention", k, intent.tick(inp["observation"].fields,
                                                                                 inp["outcome"].fields))
+                for k, inp in j_drv.put("outcome", m):
+                    bus.send("drives", "homeo/drives", k, drives.tick(
+                        inp["world"].fields, inp["intention"].fields["intention"], inp["outcome"].fields))
             elif topic == "drives":
                 for k, inp in j_dec.put("drives", m):
-                    out = inp.get("outcome")
-                    bus.send("action", "homeo/action", k, decision.tick(k, inp["drives"].fields,
-                                                                        out.fields if out else None))
+                    bus.send("action", "homeo/action", k, decision.tick(k, inp["drives"].fields))
             elif topic == "action":
                 assert m.tick == sim.tick
                 if sim.tick > 0:  # the drives after the last tick come with this tick's action
@@ -91,7 +91,7 @@ def run_bus_graph(sc, seed: int, iterations: int, shuffle_seed: int = 0):
                 name = m.fields["action"]
                 actions.append(name)
                 k = sim.tick
-                res = sim.step(sc.action_index(name))
+                res = sim.step(sc.action_index(name), m.fields["intention"])
                 bus.send("outcome", "homeo/outcome", k, res.outcome)
                 final = sim.tick >= iterations
                 bus.send("obs", "homeo/observation", sim.tick, sim.observation_msg())
@@ -113,3 +113,11 @@ def test_bus_graph_equals_runner_on_the_toy_scenario(toy):
     ref = run_episode(RunConfig(iterations=300, seed=5), toy, keep_actions=True)
     assert actions == [toy.actions[a].name for a in ref.actions]
     assert metrics == ref.metrics
+
+
+def test_bus_graph_equals_the_runner_with_bayesian_recognition(thesis):
+    n = 400
+    actions, metrics = run_bus_graph(thesis, seed=2, iterations=n, shuffle_seed=3, mode="bayes")
+    ref = run_episode(RunConfig(iterations=n, seed=2, intention="bayes"), thesis, keep_actions=True)
+    assert actions == [thesis.actions[a].name for a in ref.actions]
+    assert metrics == ref.metrics and "intention_accuracy" in metrics

@@ -79,7 +79,9 @@ class DrivesStage:
         from .perception import perceived_code
 
         sc = self.sc
+        learned_from = None
         if outcome is not None and self.prev_code is not None:
+            learned_from = {k: outcome[k] for k in ("action", "feedback", "proposal")}
             action = sc.action_index(outcome["action"]) if outcome["action"] is not None else None
             fb = outcome["feedback"]
             # what the robot itself can tell: it saw an intention, or the human reacted
@@ -89,6 +91,8 @@ class DrivesStage:
         fields = self.tracker.perceive(world["body"], code)
         fields["intention"] = intention
         fields["world"] = {k: world[k] for k in ("robot", "objects", "human")}
+        if learned_from is not None:
+            fields["outcome"] = learned_from
         if world.get("final"):
             fields["final"] = True
         self.prev_code, self.prev_intention = code, intention

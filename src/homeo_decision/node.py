@@ -1,16 +1,17 @@
 """``homeo_decision`` node: Object-Q selection and learning (Algorithm 1).
 
 Publishes  /homeo/action (event), /diagnostics
-Subscribes /homeo/drives (state: drives, m_dom and the world they were perceived in),
-           /homeo/outcome (event)
+Subscribes /homeo/drives (state: drives, m_dom, the world they were perceived in, and the
+           outcome of the last tick: executed action, feedback, proposal)
 Services   ~/save_q, ~/load_q (std_srvs/Trigger: the file in q_table_path),
            ~/reset (forget the Q-table and reseed)
 Parameters dod [0, 1] (Eq 3.27), xi >= 0 (Eq 3.20), gamma [0, 1] (Eq 3.14), feedback (use the
            user's feedback, Eq 3.21), pseudo_update (Eq 3.23), seed, q_table_path,
            load_on_start; all but the last take effect on the next tick.
 
-Tick k needs the drives of tick k and the outcome of tick k-1: learn from k-1,
-then choose for k (``RobotStep``).
+Tick k needs only the drives of tick k, which carry the outcome of tick k-1 as the drives
+node took it in: learn from k-1, then choose for k (``RobotStep``). One input per tick keeps
+the decision off the join and saves a delivery per tick (``homeo-launch bench``).
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from std_srvs.srv import Trigger
 
 from homeo_msgs_py.lockstep import TickJoin
 from homeo_msgs_py.node_base import HomeoNode, NodeConfigError, run_node
-from homeo_msgs_py.topics import ACTION, DRIVES, OUTCOME
+from homeo_msgs_py.topics import ACTION, DRIVES
 
 from . import qtable_io
 from .agent import DecisionCore
@@ -62,10 +63,9 @@ class DecisionNode(HomeoNode):
             self.get_logger().info(msg)
         self.add_on_set_parameters_callback(self._on_params)
 
-        self.join = TickJoin({"drives": 0, "outcome": -1})
+        self.join = TickJoin({"drives": 0})
         self.pub = self.publisher(ACTION, min_subs=1)
         self.subscribe(DRIVES, lambda m: self._put("drives", m))
-        self.subscribe(OUTCOME, lambda m: self._put("outcome", m))
         self.create_service(Trigger, "~/save_q", self._on_save)
         self.create_service(Trigger, "~/load_q", self._on_load)
         self.create_service(Trigger, "~/reset", self._on_reset)
@@ -99,8 +99,7 @@ class DecisionNode(HomeoNode):
             self._tick(k, inputs)
 
     def _tick(self, k: int, inputs: dict) -> None:
-        out = inputs.get("outcome")
-        fields = self.stage.tick(k, inputs["drives"].fields, out.fields if out is not None else None)
+        fields = self.stage.tick(k, inputs["drives"].fields)
         self.send(self.pub, k, fields, self.join.run)
 
     # -- services -------------------------------------------------------------------------

@@ -46,7 +46,7 @@ class RobotStep:
 
 
 class DecisionStage:
-    """The decision node without ROS: ``homeo/drives`` (+ the last outcome) in, ``homeo/action`` out."""
+    """The decision node without ROS: ``homeo/drives`` in, ``homeo/action`` out."""
 
     def __init__(self, core: DecisionCore):
         self.core = core
@@ -55,8 +55,8 @@ class DecisionStage:
     def restart(self) -> None:
         self.step.restart()
 
-    def tick(self, k: int, d: dict, outcome: dict | None) -> dict:
-        """Tick k from the drives of k and the outcome of k-1 -> ``homeo/action`` fields.
+    def tick(self, k: int, d: dict) -> dict:
+        """Tick k from the drives of k (with the outcome of k-1 they carry) -> ``homeo/action`` fields.
 
         The message also carries the drives the choice was made with: the simulation's metrics
         of tick k-1 need them (d(t) after the iteration). When the run ends at k, the action is
@@ -69,6 +69,7 @@ class DecisionStage:
         p = core.percept_from(code, [d["drives"][n] for n in sc.drive_names], [d["intensities"][m] for m in mot],
                               mot.index(d["m_dom"]))
         out = None
+        outcome = d.get("outcome")
         if outcome is not None:
             out = Outcome(sc.action_index(outcome["action"]) if outcome["action"] is not None else None,
                           outcome["feedback"],
@@ -77,7 +78,7 @@ class DecisionStage:
         final = bool(d.get("final"))
         a, _ = self.step.tick(k, p, out, after, final=final)
         fields = {"action": sc.actions[a].name if a is not None else None, "m_dom": d["m_dom"],
-                  "tau": core.phase(k).tau, "drives": d["drives"],
+                  "tau": core.phase(k).tau, "drives": d["drives"], "intention": d["intention"],
                   "params": {"dod": core.dod, "xi": core.xi, "gamma": core.gamma, "feedback": core.use_feedback,
                              "pseudo_update": core.pseudo}}
         if "after_action" in d:

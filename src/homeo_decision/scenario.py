@@ -43,7 +43,17 @@ OPEN_CHOICES: dict[str, tuple[Any, Any]] = {
     "human_leave_proposal": ("first", ("first", "MoveToR", "MoveToC", "random")),
     "human_proposal_prob": (1.0, (0.0, 1.0)),
     "metrics_sample": ("end", ("end", "after_action")),
+    # intention recognition (Section 2.3; docs/INTENTION.md): the recogniser and the simulated user
+    "intention_threshold": (0.0, (0.0, 1.0)),  # below this posterior the recognised intention is `none`
+    "intention_prior_strength": (10.0, (0.0, 1e6)),  # textbook observations each prior CPD column is worth
+    "intention_reveal": ("proposal", ("proposal", "feedback", "never")),  # which responses reveal the intention
+    "gesture_noise": (0.0, (0.0, 1.0)),  # P(a channel's symbol is uniform noise instead of the user's habit)
+    "movement_noise": (0.0, (0.0, 1.0)),
+    "keyword_noise": (0.0, (0.0, 1.0)),
 }
+
+# Observed children of the hidden intention in the Bayesian network (Section 2.3, Fig 2.3).
+OBS_CHANNELS = ("gesture", "movement", "keyword")
 
 
 class ScenarioError(ValueError):
@@ -74,6 +84,25 @@ class IntentionSpec:
     reasonable: dict
 
 
+@dataclass(frozen=True)
+class ObservationSpec:
+    """The scenario's ``observations`` block: alphabets, the network's prior and the user's habits.
+
+    ``prior`` and ``habits`` map a channel to one distribution over its alphabet per intention
+    (``Scenario.intention_names`` order, ``none`` first): P0(symbol | intention) for the
+    network, and how the simulated user actually expresses each intention.
+    """
+
+    alphabets: dict  # channel -> tuple of symbols
+    prior_intention: tuple  # P0(intention)
+    prior: dict  # channel -> tuple (per intention) of tuple (per symbol)
+    habits: dict  # channel -> same shape as prior
+
+    def layout(self) -> dict:
+        """What a saved intention model must agree with (besides the intentions)."""
+        return {ch: list(self.alphabets[ch]) for ch in OBS_CHANNELS}
+
+
 @dataclass
 class Scenario:
     """A validated scenario plus its compiled tables (see module docstring)."""
@@ -99,6 +128,7 @@ class Scenario:
     base_values: tuple = ()
     n_codes: int = 0
     c: "Compiled" = field(default=None, repr=False)  # type: ignore[assignment]
+    observations: ObservationSpec | None = None  # None: the scenario cannot run intention recognition
 
     # -- names ---------------------------------------------------------------
     @property
@@ -421,6 +451,9 @@ def _scenario_from_dict(raw: Any, source: str, overrides: Mapping[str, Any] | No
     open_ = dict(raw.get("open", {}))
     open_.update(overrides or {})
     opens = _check_open(open_, dnames, objects, base_vars, all_vars, anames, where)
+    observations = None
+    if "observations" in raw:
+        observations = _parse_observations(raw["observations"], [NONE_INTENTION] + [i.name for i in intentions], where)
 
     sc = Scenario(
         name=str(raw.get("name", Path(source).stem)),
@@ -441,6 +474,7 @@ def _scenario_from_dict(raw: Any, source: str, overrides: Mapping[str, Any] | No
         source=source,
         base_vars=tuple(base_vars),
         base_values=tuple(tuple(v) for v in base_values),
+        observations=observations,
     )
     _compile(sc)
     return sc
@@ -452,6 +486,71 @@ def _unique(names: Sequence, what: str, where: str) -> None:
         if n in seen:
             raise ScenarioError(f"{where}: {what} {n!r} is declared twice")
         seen.add(n)
+
+
+def _parse_observations(obs: Any, intention_names: list, where: str) -> ObservationSpec:
+    """Validate the ``observations`` block (alphabets, ``prior`` and optional ``habits``)."""
+    ctx = f"{where}: observations"
+    if not isinstance(obs, dict):
+        raise ScenarioError(f"{ctx} must be an object")
+    unknown = set(obs) - set(OBS_CHANNELS) - {"prior", "habits", "description"}
+    if unknown:
+        raise ScenarioError(f"{ctx} has unknown key(s) {sorted(unknown)}; known: {list(OBS_CHANNELS)}, prior, habits, description")
+    alphabets = {}
+    for ch in OBS_CHANNELS:
+        vals = obs.get(ch)
+        if not isinstance(vals, list) or not vals or not all(isinstance(v, str) and v for v in vals):
+            raise ScenarioError(f"{ctx}.{ch} must be a non-empty list of symbol names")
+        _unique(vals, f"{ch} symbol", where)
+        alphabets[ch] = tuple(vals)
+
+    def dist(spec: Any, symbols: Sequence[str], dctx: str) -> tuple:
+        # listed symbols get their probability, unlisted ones share the rest equally
+        if not isinstance(spec, dict):
+            raise ScenarioError(f"{dctx} must be an object of symbol: probability")
+        for sym, p in spec.items():
+            if sym not in symbols:
+                raise ScenarioError(f"{dctx}: unknown symbol {sym!r}; known: {', '.join(symbols)}")
+            if not isinstance(p, (int, float)) or isinstance(p, bool) or not 0.0 <= p <= 1.0:
+                raise ScenarioError(f"{dctx}.{sym} = {p!r} must be a probability in [0, 1]")
+        total = float(sum(spec.values()))
+        rest = [s for s in symbols if s not in spec]
+        if total > 1.0 + 1e-9:
+            raise ScenarioError(f"{dctx}: probabilities sum to {total:g}, more than 1")
+        if not rest and abs(total - 1.0) > 1e-9:
+            raise ScenarioError(f"{dctx}: probabilities sum to {total:g}; with every symbol listed they must sum to 1")
+        share = max(0.0, 1.0 - total) / len(rest) if rest else 0.0
+        return tuple(float(spec[s]) if s in spec else share for s in symbols)
+
+    def per_intention(block: Any, bctx: str) -> dict:
+        if not isinstance(block, dict):
+            raise ScenarioError(f"{bctx} must be an object with one entry per intention")
+        for name in block:
+            if name != "intention" and name not in intention_names:
+                raise ScenarioError(f"{bctx}: unknown intention {name!r}; known: {', '.join(intention_names)}")
+        missing = [n for n in intention_names if n not in block]
+        if missing:
+            raise ScenarioError(f"{bctx} lacks intention(s) {missing}: every intention (with 'none') needs an entry")
+        out = {}
+        for ch in OBS_CHANNELS:
+            rows = []
+            for name in intention_names:
+                entry = block[name]
+                if not isinstance(entry, dict) or set(entry) - set(OBS_CHANNELS):
+                    raise ScenarioError(f"{bctx}.{name} must be an object with (some of) {list(OBS_CHANNELS)}")
+                rows.append(dist(entry.get(ch, {}), alphabets[ch], f"{bctx}.{name}.{ch}"))
+            out[ch] = tuple(rows)
+        return out
+
+    prior_raw = obs.get("prior")
+    if prior_raw is None:
+        raise ScenarioError(f"{ctx} is missing 'prior' (the network's P(symbol | intention) per intention)")
+    prior = per_intention(prior_raw, f"{ctx}.prior")
+    prior_intention = dist(prior_raw.get("intention", {}), intention_names, f"{ctx}.prior.intention")
+    habits = per_intention(obs["habits"], f"{ctx}.habits") if "habits" in obs else prior
+    if "habits" in obs and "intention" in obs["habits"]:
+        raise ScenarioError(f"{ctx}.habits: 'intention' does not apply (the simulated human draws its intentions itself)")
+    return ObservationSpec(alphabets, prior_intention, prior, habits)
 
 
 def _check_learning(learning: dict, where: str) -> None:

@@ -220,6 +220,9 @@ SCHEMAS: dict[str, dict[str, tuple[Check, bool]]] = {
                         "human": (_obj({"presence": (_one_of("presences"), True),
                                         "relation": (_one_of("relations"), True)}), True)}), True),
         "after_action": (_map("drives", DRIVE, complete=True), False),  # drives before the time step
+        # what tick k-1's action did, as these drives took it in: the decision learns from it
+        "outcome": (_obj({"action": (_one_of("actions", nullable=True), True), "feedback": (_feedback, True),
+                          "proposal": (_one_of("actions", nullable=True), True)}), False),
         "final": (_bool, False),
     },
     # decision -> simulation or robot: the chosen action (null = none) and the drives it was chosen with
@@ -231,6 +234,7 @@ SCHEMAS: dict[str, dict[str, tuple[Check, bool]]] = {
                          "gamma": (_num(0.0, 1.0), True), "feedback": (_bool, True),
                          "pseudo_update": (_bool, True)}), False),
         "drives": (_map("drives", DRIVE, complete=True), False),  # the drives the choice was made with
+        "intention": (_one_of("intentions"), False),  # the recognised intention it was made for
         "after_action": (_map("drives", DRIVE, complete=True), False),
         "final": (_bool, False),  # the run ended: no action, only the last drives
     },

@@ -4,9 +4,10 @@
                   [--policy {objectq,random,rule,flatq,nofeedback}] [--adaptive-dod]
                   [--scenario FILE] [--set KEY=VALUE ...] [--save-q FILE] [--load-q FILE]
                   [--trace FILE] [--json] [--workers W] [--quiet]
+                  [--intention {oracle,bayes}] [--save-intention FILE] [--load-intention FILE]
     homeo-sim sweep {xi,dod,pseudo} [--seeds K] [--iterations N] [--out DIR] [--json] [--workers W] [--quiet]
     homeo-sim report --out DIR [--seeds K] [--iterations N] [--workers W] [--quiet]
-    homeo-sim bench [--json]
+    homeo-sim bench [--intention {oracle,bayes}] [--json]
 """
 
 from __future__ import annotations
@@ -21,12 +22,13 @@ from dataclasses import replace
 from pathlib import Path
 
 from homeo_decision.qtable_io import QTableError
+from homeo_intention.model_io import IntentionModelError
 from homeo_decision.scenario import ScenarioError
 
 from homeo_decision.baselines import POLICIES
 
-from .runner import RunConfig, build_scenario, run_episode, run_seeds
-from .stats import aggregate, json_safe
+from .runner import INTENTION_MODES, RunConfig, build_scenario, run_episode, run_seeds
+from .stats import aggregate, describe, json_safe
 from .thesis_values import TABLE_4_5
 
 PROG = "homeo-sim"
@@ -109,6 +111,12 @@ def build_parser() -> argparse.ArgumentParser:
                      help="decision maker: the thesis's Object-Q (default) or a baseline (docs/EXPERIMENTS.md)")
     run.add_argument("--adaptive-dod", action="store_true",
                      help="adjust DoD online from the user's and the robot's satisfaction (docs/EXPERIMENTS.md)")
+    run.add_argument("--intention", choices=INTENTION_MODES, default="oracle",
+                     help="oracle: the robot observes the intention (the thesis's simulation, default); "
+                          "bayes: it recognises it with the Bayesian network of Sec 2.3 (docs/INTENTION.md)")
+    run.add_argument("--save-intention", metavar="FILE",
+                     help="bayes: save the learned intention model (with --seeds: FILE per seed)")
+    run.add_argument("--load-intention", metavar="FILE", help="bayes: start from a saved intention model")
     sw = sub.add_parser("sweep", help="sweep xi (Fig 4.3), DoD (Fig 4.5) or the pseudo update (Fig 4.4)")
     sw.add_argument("param", choices=("xi", "dod", "pseudo"), help="the parameter to sweep")
     sw.add_argument("--seeds", type=_int_at_least(1), default=10, help="seeds 0..K-1 per point (default 10)")
@@ -123,6 +131,9 @@ def build_parser() -> argparse.ArgumentParser:
     add_common_arguments(rp)
     b = sub.add_parser("bench", help="iterations per second (one core) and the 20-seed wall time")
     b.add_argument("--iterations", type=_int_at_least(100), default=20000, help="iterations of the single-core run")
+    b.add_argument("--intention", choices=INTENTION_MODES, default="oracle",
+                   help="bayes: also time the recogniser (one recognition, its share of learning) and the "
+                        "bayes-mode iteration against the oracle one")
     b.add_argument("--json", action="store_true")
     return ap
 
@@ -133,7 +144,11 @@ def config_from_args(args) -> tuple[RunConfig, list[int]]:
         iterations=args.iterations, seed=seeds[0], dod=args.dod, xi=args.xi,
         pseudo_update=False if args.no_pseudo else None, scenario=args.scenario, overrides=tuple(args.set),
         load_q=getattr(args, "load_q", None), save_q=getattr(args, "save_q", None), trace=getattr(args, "trace", None),
-        policy=getattr(args, "policy", "objectq"), adaptive_dod=getattr(args, "adaptive_dod", False))
+        policy=getattr(args, "policy", "objectq"), adaptive_dod=getattr(args, "adaptive_dod", False),
+        intention=getattr(args, "intention", "oracle"), load_intention=getattr(args, "load_intention", None),
+        save_intention=getattr(args, "save_intention", None))
+    if cfg.intention != "bayes" and (cfg.load_intention or cfg.save_intention):
+        raise UserError(f"{'--save-intention' if cfg.save_intention else '--load-intention'} needs --intention bayes")
     if cfg.adaptive_dod and cfg.policy not in ("objectq", "nofeedback"):
         raise UserError(f"--adaptive-dod needs --policy objectq or nofeedback (a DoD-weighted Object-Q robot), not {cfg.policy}")
     if (cfg.save_q or cfg.load_q) and cfg.policy not in ("objectq", "nofeedback"):
@@ -158,12 +173,18 @@ def _progress(total: int, unit: str, quiet: bool):
 def cmd_run(args) -> int:
     cfg, seeds = config_from_args(args)
     sc = build_scenario(cfg)  # validates the scenario before any worker starts
-    for f in (cfg.load_q,):
+    for f, what in ((cfg.load_q, "Q-table"), (cfg.load_intention, "intention model")):
         if f and not Path(f).is_file():
-            raise UserError(f"Q-table file not found: {f}")
+            raise UserError(f"{what} file not found: {f}")
+    if cfg.intention == "bayes" and sc.observations is None:
+        raise UserError(f"--intention bayes: scenario {sc.source} has no 'observations' block (docs/INTENTION.md)")
+    if cfg.load_intention:
+        from homeo_intention.model import IntentionModel
+
+        IntentionModel(sc).load(cfg.load_intention)  # a bad file fails here, in one line, not in a worker
     many = len(seeds) > 1
     results = []
-    if many and not (cfg.trace or cfg.save_q or cfg.load_q):
+    if many and not (cfg.trace or cfg.save_q or cfg.load_q or cfg.save_intention):
         with _progress(len(seeds), "seed", args.quiet) as bar:
             results = run_seeds(cfg, seeds, args.workers, on_done=lambda r: bar.update(1))
     else:
@@ -171,7 +192,8 @@ def cmd_run(args) -> int:
             step = max(1, cfg.iterations // 100)
             tick = lambda t: bar.update(step) if t % step == step - 1 else None  # noqa: E731
             for s in seeds:
-                c = replace(cfg, seed=s, trace=_per_seed_path(cfg.trace, s, many), save_q=_per_seed_path(cfg.save_q, s, many))
+                c = replace(cfg, seed=s, trace=_per_seed_path(cfg.trace, s, many), save_q=_per_seed_path(cfg.save_q, s, many),
+                            save_intention=_per_seed_path(cfg.save_intention, s, many))
                 r = run_episode(c, sc, on_tick=None if args.quiet else tick)
                 if r.load_report is not None and not args.json:
                     lr = r.load_report
@@ -182,13 +204,23 @@ def cmd_run(args) -> int:
                         msg += f"; dropped objects not in this scenario: {', '.join(lr.dropped)}"
                     print(msg, file=sys.stderr)
                 results.append(r)
-    metrics = aggregate([r.metrics for r in results], sc.drive_names)
-    out = {"iterations": cfg.iterations, "seeds": seeds, "metrics": metrics}
+    out = run_output(cfg.iterations, seeds, [r.metrics for r in results], sc.drive_names)
     if args.json:
         print(json.dumps(json_safe(out)))
     else:
         print(format_table(out, sc.drive_names, sc.name))
     return 0
+
+
+def run_output(iterations: int, seeds: list, per_seed: list[dict], drive_names) -> dict:
+    """The JSON of ``run`` (and of ``homeo-launch sim``): the metrics over seeds and, when the
+    intention was recognised, the recognition accuracy at both ends of the run."""
+    out = {"iterations": iterations, "seeds": seeds, "metrics": aggregate(per_seed, drive_names)}
+    if per_seed and "intention_accuracy" in per_seed[0]:
+        # fraction of ticks whose recognised intention is the human's true one (docs/INTENTION.md)
+        out["intention_accuracy"] = {k: describe([m["intention_accuracy"][k] for m in per_seed])
+                                     for k in per_seed[0]["intention_accuracy"]}
+    return out
 
 
 def format_table(out: dict, drive_names, scenario_name: str) -> str:
@@ -210,6 +242,8 @@ def format_table(out: dict, drive_names, scenario_name: str) -> str:
         for dn in list(drive_names) + ["all"]:
             ref = TABLE_4_5[key].get(dn)
             lines.append(f"{key:<10}{dn:<6} {cell(m[key][dn]):>{w}}  {'' if ref is None else f'{ref:7.2f}':>7}")
+    for key, d in out.get("intention_accuracy", {}).items():
+        lines.append(f"{'accuracy':<10}{key.replace('_', ' '):<6} {cell(d):>{w}}")
     return "\n".join(lines)
 
 
@@ -272,6 +306,12 @@ def cmd_report(args) -> int:
 def cmd_bench(args) -> int:
     from homeo_decision.scenario import load_scenario
 
+    if args.intention == "bayes":
+        from homeo_intention.bench import bench_intention, format_bench
+
+        res = bench_intention(args.iterations)
+        print(json.dumps(res) if args.json else format_bench(res))
+        return 0
     sc = load_scenario()
     cfg = RunConfig(iterations=args.iterations, seed=0)
     best = math.inf
@@ -305,7 +345,7 @@ def main(argv=None) -> int:
     except UserError as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 2
-    except (ScenarioError, QTableError) as exc:
+    except (ScenarioError, QTableError, IntentionModelError) as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # e.g. piped into head: stop quietly, as Unix tools do

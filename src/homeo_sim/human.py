@@ -4,6 +4,14 @@ Algorithm 2 line 9 reads "intention != null" where the text means "== null": no
 intention, no feedback. Settings the thesis leaves open (scenario ``open``):
 ``human_no_intention_prob`` (a new draw is "no intention"), ``human_leave_prob`` /
 ``human_return_prob`` (presence), ``human_leave_proposal`` and ``human_proposal_prob``.
+
+For intention recognition (Section 2.3, docs/INTENTION.md) the human also shows what it
+wants: ``observe`` emits a gesture, a movement and a spoken keyword drawn from its personal
+habits (the scenario's ``observations.habits``, not the network's textbook prior), each
+replaced by uniform noise with probability ``<channel>_noise``. These draws use their own
+"observation" stream, so the "human" stream, and with it every oracle-mode result, does
+not depend on them. ``intention_reveal`` says which responses reveal the true intention
+(``Response.clarified``).
 """
 
 from __future__ import annotations
@@ -11,7 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from homeo_decision.rng import UniformStream
-from homeo_decision.scenario import Scenario
+from homeo_decision.scenario import OBS_CHANNELS, Scenario, ScenarioError
 
 
 @dataclass(slots=True)
@@ -19,6 +27,7 @@ class Response:
     feedback: int  # +1 / -1 / 0
     proposal: int | None  # action id
     satisfied: bool
+    clarified: int | None = None  # the intention (index) this response reveals, None if it reveals none
 
 
 NO_RESPONSE = Response(0, None, False)
@@ -37,12 +46,15 @@ class SimHuman:
         self.desired_order = [()] + [tuple(sc.c.action_ids[a] for a in it.desired) for it in sc.intentions]
         self.reasonable = sc.c.reasonable
         self.with_presence = sc.c.with_presence
+        self.reveal = o["intention_reveal"]
+        self._habits = _habit_tables(sc)
         self.reset(seed)
 
     def reset(self, seed: int | None = None) -> None:
         if seed is not None:
             self.seed = int(seed)
         self.rng = UniformStream(self.seed, "human")
+        self.obs_rng = UniformStream(self.seed, "observation")
         self.intention = 0  # Algorithm 2 line 1: intention = null
         self.present = True
         self.satisfied = False
@@ -75,7 +87,7 @@ class SimHuman:
             return NO_RESPONSE
         if action in self.desired[it]:
             self.satisfied = True
-            return Response(1, None, True)
+            return Response(1, None, True, it if self.reveal == "feedback" else None)
         proposal = None
         if self.rng.random() < self.p_propose:
             options = self.desired_order[it]
@@ -87,4 +99,45 @@ class SimHuman:
             else:
                 named = self.sc.c.action_ids[rule]
                 proposal = named if named in options else options[0]
-        return Response(-1, proposal, False)
+        # a proposal names a desired action, so it tells the robot what the human meant
+        clarified = it if proposal is not None and self.reveal != "never" else None
+        return Response(-1, proposal, False, clarified)
+
+    def observe(self, with_intention: bool = False) -> dict:
+        """What the robot sees of the human this tick: one symbol per channel (and, for the
+        oracle recogniser, the true intention's name)."""
+        if self._habits is None:
+            raise ScenarioError(f"{self.sc.source}: the scenario has no 'observations' block: the simulated human cannot be observed")
+        it = self.intention
+        u = self.obs_rng.random
+        out = {}
+        for ch, symbols, noise, cum in self._habits:
+            if u() < noise:
+                out[ch] = symbols[int(u() * len(symbols))]
+            else:
+                x, row = u(), cum[it]
+                k = 0
+                while k < len(row) - 1 and x >= row[k]:  # inverse CDF of the habit
+                    k += 1
+                out[ch] = symbols[k]
+        if with_intention:
+            out["intention"] = self.sc.intention_names[it]
+        return out
+
+
+def _habit_tables(sc: Scenario):
+    """Per channel: (name, symbols, noise, cumulative habit per intention); None without observations."""
+    spec = sc.observations
+    if spec is None:
+        return None
+    out = []
+    for ch in OBS_CHANNELS:
+        cum = []
+        for row in spec.habits[ch]:
+            acc, c = 0.0, []
+            for p in row:
+                acc += p
+                c.append(acc)
+            cum.append(c)
+        out.append((ch, spec.alphabets[ch], sc.open[f"{ch}_noise"], cum))
+    return tuple(out)

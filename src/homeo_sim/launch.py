@@ -26,13 +26,14 @@ from homeo_msgs_py.topics import ACTION, DRIVES, INTENTION, OBSERVATION, OUTCOME
 
 from .cli import UserError, _float_in, _int_at_least, _Parser, _setting, format_table
 from .processes import Graph, NodeSpec, dds_defaults, graph_env
-from .stats import aggregate, json_safe
+from .cli import run_output
+from .stats import json_safe
 
 PROG = "homeo-launch"
 DISCOVERY_TIMEOUT_S = 60.0
 # (writers, readers) each topic has in the simulated graph
 EXPECTED_ENDPOINTS = {WORLD: (1, 1), OBSERVATION: (1, 1), INTENTION: (1, 1), DRIVES: (1, 1), ACTION: (1, 1),
-                      OUTCOME: (1, 2)}
+                      OUTCOME: (1, 1)}
 MODULES = {"homeo_sim": "homeo_sim.node", "homeo_intention": "homeo_intention.node",
            "homeo_drives": "homeo_decision.drives_node", "homeo_decision": "homeo_decision.node"}
 
@@ -55,6 +56,7 @@ class SimOptions:
     save_q: str | None = None
     trace: str | None = None
     action_timeout: float = 5.0
+    intention: str = "bayes"  # the graph recognises intentions; "oracle" is the thesis's simulation
 
 
 def sim_specs(o: SimOptions) -> list[NodeSpec]:
@@ -72,10 +74,12 @@ def sim_specs(o: SimOptions) -> list[NodeSpec]:
         decision["load_on_start"] = True
         if o.save_q and o.save_q != o.load_q:
             decision["q_table_path"] = os.path.abspath(o.load_q)  # switched to save_q before saving
+    bayes = o.intention == "bayes"
     sim = dict(common, seed=o.seed, iterations=o.iterations, rate=float(o.rate),
-               action_timeout=float(o.action_timeout), trace_path=os.path.abspath(o.trace) if o.trace else "")
+               action_timeout=float(o.action_timeout), trace_path=os.path.abspath(o.trace) if o.trace else "",
+               intention_accuracy=bayes, outcome_readers=2 if bayes else 1)
     return [NodeSpec("homeo_sim", MODULES["homeo_sim"], sim),
-            NodeSpec("homeo_intention", MODULES["homeo_intention"], dict(common)),
+            NodeSpec("homeo_intention", MODULES["homeo_intention"], dict(common, mode=o.intention)),
             NodeSpec("homeo_drives", MODULES["homeo_drives"], dict(common)),
             NodeSpec("homeo_decision", MODULES["homeo_decision"], decision)]
 
@@ -142,6 +146,13 @@ class Monitor:
         self.rclpy.try_shutdown()
 
 
+def expected_endpoints(o: SimOptions) -> dict:
+    out = dict(EXPECTED_ENDPOINTS)
+    if o.intention == "bayes":
+        out[OUTCOME] = (1, 2)  # the recogniser learns from the outcome too
+    return out
+
+
 def wait_until_up(graph: Graph, mon: Monitor, nodes, endpoints, bound: float) -> None:
     end = time.monotonic() + bound
     while True:
@@ -173,7 +184,7 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
     try:
         graph.start()
         mon = Monitor()
-        wait_until_up(graph, mon, SIM_NODES, EXPECTED_ENDPOINTS, discovery_timeout)
+        wait_until_up(graph, mon, SIM_NODES, expected_endpoints(o), discovery_timeout)
         t_start = None
         last_tick = -1
         while True:
@@ -246,6 +257,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--dod", type=_float_in(0.0, 1.0), default=None, help="Degree of Dedication (Eq 3.27)")
     s.add_argument("--xi", type=_float_in(0.0, 1000.0), default=None, help="motivation factor xi (Eq 3.20)")
     s.add_argument("--no-pseudo", action="store_true", help="switch off pseudo updates (Eq 3.23)")
+    s.add_argument("--intention", choices=("bayes", "oracle"), default="bayes",
+                   help="recognise the intention with the Bayesian network (default) or observe it (the thesis's "
+                        "simulation; what homeo-sim run does by default)")
     s.add_argument("--scenario", metavar="FILE", default=None, help="scenario JSON (default: the thesis scenario)")
     s.add_argument("--set", metavar="KEY=VALUE", type=_setting, action="append", default=[],
                    help="override an open choice of the scenario")
@@ -258,7 +272,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--json", action="store_true", help="print the metrics as homeo-sim run --json does")
     s.add_argument("--quiet", action="store_true", help="no progress bar")
     b = sub.add_parser("bench", help="seconds per tick of the graph against a raw rclpy chain (the floor)")
-    b.add_argument("--iterations", type=_int_at_least(10), default=2000, help="ticks of each (default 2000)")
+    b.add_argument("--iterations", type=_int_at_least(10), default=1000, help="ticks of each (default 1000)")
+    b.add_argument("--rounds", type=_int_at_least(1), default=3, help="alternating graph/floor pairs (default 3)")
     b.add_argument("--json", action="store_true")
     return ap
 
@@ -274,7 +289,8 @@ def options_from_args(a) -> SimOptions:
     load_scenario(a.scenario, overrides=dict(a.set))  # a bad scenario is a one-line error here, not in four nodes
     return SimOptions(iterations=a.iterations, rate=a.rate, seed=a.seed, dod=a.dod, xi=a.xi,
                       pseudo_update=False if a.no_pseudo else None, scenario=a.scenario, overrides=tuple(a.set),
-                      load_q=a.load_q, save_q=a.save_q, trace=a.trace, action_timeout=a.action_timeout)
+                      load_q=a.load_q, save_q=a.save_q, trace=a.trace, action_timeout=a.action_timeout,
+                      intention=a.intention)
 
 
 def cmd_sim(a) -> int:
@@ -314,8 +330,7 @@ def cmd_sim(a) -> int:
         code = 0 if o.iterations == 0 else 130
     else:
         code = 0
-    metrics = aggregate([status["metrics"]], sc.drive_names)
-    out = {"iterations": o.iterations, "seeds": [o.seed], "metrics": metrics}
+    out = run_output(o.iterations, [o.seed], [status["metrics"]], sc.drive_names)
     if a.json:
         print(json.dumps(json_safe(out)))
     else:

@@ -79,3 +79,23 @@ def cumulative_series(drives: np.ndarray, expressed: np.ndarray, satisfied: np.n
         "expressed": expressed,  # per iteration: an intention was expressed (for moving-window rates)
         "satisfied": satisfied,  # per iteration: the robot's action satisfied it
     }
+
+
+# -- intention recognition (docs/INTENTION.md) ------------------------------------------------
+# Accuracy of a run's recogniser: the fraction of ticks whose recognised intention equals the
+# human's true one at that tick (`none` included: recognising "nothing wanted" counts too).
+
+ACCURACY_WINDOW = 500
+
+
+def accuracy_ends(hits: Sequence[bool], window: int = ACCURACY_WINDOW) -> dict:
+    """Accuracy over the first and the last ``window`` ticks (the whole run if it is shorter)."""
+    if not hits:
+        raise ValueError("no iterations recorded")
+    w = min(window, len(hits))
+    return {f"first_{window}": sum(hits[:w]) / w, f"last_{window}": sum(hits[-w:]) / w}
+
+
+def accuracy_curve(hits: Sequence[bool], width: int = 250) -> list[float]:
+    """Accuracy per consecutive window of ``width`` ticks (a shorter last window is dropped)."""
+    return [sum(hits[i:i + width]) / width for i in range(0, len(hits) - width + 1, width)]

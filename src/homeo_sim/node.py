@@ -6,7 +6,7 @@ Subscribes /homeo/action (tick k's action, with the robot's drives that the metr
 Services   ~/reset (std_srvs/Trigger): a new run from tick 0 (the robot keeps its Q-table)
 Parameters seed (int), iterations (int, 0 = until stopped), rate (Hz, 0 = as fast as lockstep
            allows), action_timeout (s), trace_path (JSON lines per tick, '' = none),
-           wait_for_readers (bool), scenario, overrides (read-only)
+           wait_for_readers (bool), outcome_readers, intention_accuracy, scenario, overrides
 
 Tick k: publish world(k) and observation(k); wait for action(k) (a timeout counts as no
 action and is reported); step the world; publish outcome(k); then tick k+1. The metrics of
@@ -29,9 +29,9 @@ from homeo_msgs_py.topics import ACTION, OBSERVATION, OUTCOME, RUN_STATUS, WORLD
 
 from .sim_core import SimCore
 
-# readers the standard graph has on each topic: drives reads the world; intention the
-# observation; drives and decision the outcome (and intention too, when it learns)
-READERS = {WORLD: 1, OBSERVATION: 1, OUTCOME: 2}
+# readers the standard graph has on each topic: drives reads the world and the outcome (the
+# intention node reads the outcome too, when it learns); intention reads the observation
+READERS = {WORLD: 1, OBSERVATION: 1, OUTCOME: 1}
 WRITERS = (ACTION,)
 STATUS_PERIOD_S = 0.25
 
@@ -54,14 +54,17 @@ class SimNode(HomeoNode):
         self.declare_parameter("wait_for_readers", True, d(description="start only when the standard graph's "
                                                            "readers and writers have matched"))
         self.declare_parameter("outcome_readers", READERS[OUTCOME], d(
-            description="readers of /homeo/outcome to wait for (3 when the intention node learns)",
+            description="readers of /homeo/outcome to wait for (2 when the intention node learns)",
             integer_range=[IntegerRange(from_value=0, to_value=100, step=1)]))
         self.add_on_set_parameters_callback(self._on_params)
         p = self.get_parameter
         self.iterations = p("iterations").value
         self.rate = p("rate").value
         self.timeout = p("action_timeout").value
-        self.core = SimCore(self.sc, p("seed").value)
+        self.declare_parameter("intention_accuracy", False, d(
+            description="score the recognised intention of each action against the human's (bayes mode)",
+            read_only=True))
+        self.core = SimCore(self.sc, p("seed").value, p("intention_accuracy").value)
         self.sample_after = self.sc.open["metrics_sample"] == "after_action"
         self.trace = self._open_trace(p("trace_path").value)
 
@@ -196,8 +199,9 @@ class SimNode(HomeoNode):
                 if self._due_timer is None:
                     self._due_timer = self.create_timer(max(0.0, due - time.monotonic()), self._on_due)
                 return
-        name = self._action.fields["action"]
-        self._step(self.sc.action_index(name) if name is not None else None)
+        f = self._action.fields
+        name = f["action"]
+        self._step(self.sc.action_index(name) if name is not None else None, f.get("intention"))
 
     def _on_due(self) -> None:
         self._due_timer.cancel()
@@ -205,13 +209,13 @@ class SimNode(HomeoNode):
         self._due_timer = None
         self._advance()
 
-    def _step(self, action: int | None) -> None:
+    def _step(self, action: int | None, recognised: str | None = None) -> None:
         """Tick k: the metrics of k-1 (with the drives the action came with), then the world moves."""
         core = self.core
         k = core.tick
         if k > 0 and self._last_drives is not None:
             core.record(self._last_drives)
-        res = core.step(action)
+        res = core.step(action, recognised)
         self.send(self.pub_outcome, k, res.outcome, self.run)
         if self.trace is not None:
             self.trace.write(json.dumps(res.trace) + "\n")

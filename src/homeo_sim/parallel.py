@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import signal
+import threading
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Callable, Sequence, TypeVar
 
@@ -33,12 +34,23 @@ def parallel_map(fn: Callable[[A], R], args: Sequence[A], workers: int | None = 
                 on_done(out[-1])
         return out
     results: dict[int, R] = {}
+    # Ctrl-C only sets a flag, checked between waits: a KeyboardInterrupt raised inside the pool's
+    # own bookkeeping (submit, process start-up) can leave shutdown() waiting forever
+    interrupted = []
+    main_thread = threading.current_thread() is threading.main_thread()
+    old = signal.signal(signal.SIGINT, lambda *_: interrupted.append(1)) if main_thread else None
     pool = ProcessPoolExecutor(max_workers=workers, initializer=_ignore_sigint)
     try:
-        futs = {pool.submit(fn, a): i for i, a in enumerate(args)}
+        futs = {}
+        for i, a in enumerate(args):
+            if interrupted:
+                raise KeyboardInterrupt
+            futs[pool.submit(fn, a)] = i
         pending = set(futs)
         while pending:
-            finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+            if interrupted:
+                raise KeyboardInterrupt
+            finished, pending = wait(pending, timeout=0.1, return_when=FIRST_COMPLETED)
             for f in finished:
                 results[futs[f]] = f.result()
                 if on_done:
@@ -46,5 +58,8 @@ def parallel_map(fn: Callable[[A], R], args: Sequence[A], workers: int | None = 
     except BaseException:
         pool.shutdown(wait=True, cancel_futures=True)
         raise
+    finally:
+        if main_thread:
+            signal.signal(signal.SIGINT, old)
     pool.shutdown(wait=True)
     return [results[i] for i in range(len(args))]

@@ -9,6 +9,19 @@ One iteration (tick t):
      it wants next (Algorithm 2 lines 3-6);
   5. the robot perceives the new state s' and learns (Eq 3.14, 3.23);
   6. the metrics record d(t) after the iteration.
+
+With ``intention="bayes"`` the robot no longer sees the human's intention: it recognises it from
+the human's observations (Section 2.3, ``homeo_intention``). One tick t of that loop, in the
+order the ROS node graph replicates (docs/INTENTION.md):
+  obs_t = human.observe(); rec_t = model.recognise(obs_t);
+  perceived code = the true world code with the intention replaced by rec_t.intention;
+  p = robot.perceive(drives, perceived code); a = robot.select(p, t);
+  world.execute(a) (the true world); body.apply_action; drives.apply_action(perceived code, a);
+  resp = human.respond(a) (the true intention); model.learn(obs_t, resp.clarified);
+  drives.apply_feedback; body.apply_time; drives.apply_time(rec_t.intention != 0 or feedback != 0,
+  resp.satisfied); drives.set_body; human.advance; world.set_human; obs/recognition/perceive of
+  t+1; robot.learn. HSR and the other metrics use the human's true expressed/satisfied.
+The oracle mode keeps the loop below unchanged (bit-identical results, full speed).
 """
 
 from __future__ import annotations
@@ -23,7 +36,7 @@ from homeo_decision.scenario import Scenario, load_scenario
 
 from .body import SimBody
 from .human import SimHuman
-from .metrics import MetricRecorder
+from .metrics import MetricRecorder, accuracy_ends
 from .world import World
 
 
@@ -42,6 +55,12 @@ class RunConfig:
     series: bool = False  # keep the per-iteration metric series
     policy: str = "objectq"  # see POLICIES
     adaptive_dod: bool = False
+    intention: str = "oracle"  # "oracle": the intention is observed (the thesis's simulation); "bayes": recognised
+    load_intention: str | None = None  # start the bayes recogniser from a saved model
+    save_intention: str | None = None
+
+
+INTENTION_MODES = ("oracle", "bayes")
 
 
 @dataclass
@@ -51,6 +70,7 @@ class EpisodeResult:
     series: dict | None = None
     load_report: object | None = None
     actions: list = field(default_factory=list)
+    intention_hits: list | None = None  # bayes mode: per tick, recognised intention == the human's true one
 
 
 def build_scenario(cfg: RunConfig) -> Scenario:
@@ -84,9 +104,12 @@ class Simulation:
         self.load_report = None
         if cfg.load_q:
             self.load_report = qtable_io.load(self.robot.q, cfg.load_q)
+        self.model = make_intention_model(sc, cfg)  # None in oracle mode: the fast loop
 
     def run(self, iterations: int, trace: TextIO | None = None, on_tick: Callable[[int], None] | None = None,
             keep_actions: bool = False) -> EpisodeResult:
+        if self.model is not None:
+            return self.run_recognised(iterations, trace, on_tick, keep_actions)
         sc, world, human, body, drives, robot = self.sc, self.world, self.human, self.body, self.drives, self.robot
         rec = MetricRecorder(sc.drive_names, [d.threshold for d in sc.drives])
         span_action = sc.open["reward_span"] == "action"
@@ -128,6 +151,82 @@ class Simulation:
             p = p_next
         res = EpisodeResult(self.cfg.seed, rec.summary(), rec.series() if self.cfg.series else None, self.load_report, actions)
         return res
+
+    def run_recognised(self, iterations: int, trace: TextIO | None = None,
+                       on_tick: Callable[[int], None] | None = None, keep_actions: bool = False) -> EpisodeResult:
+        """The loop with a recogniser between the human and the robot (tick order in the module docstring)."""
+        sc, world, human, body, drives, robot, model = (self.sc, self.world, self.human, self.body, self.drives,
+                                                        self.robot, self.model)
+        rec = MetricRecorder(sc.drive_names, [d.threshold for d in sc.drives])
+        span_action = sc.open["reward_span"] == "action"
+        sample_after_action = sc.open["metrics_sample"] == "after_action"
+        with_intention = sc.c.with_intention
+        truth = model.needs_truth  # the oracle reads the true intention from the observation
+        actions, hits = [], []
+
+        human.advance(world.code)
+        world.set_human(human.present, human.intention)
+        drives.set_body(body.values)
+        obs = human.observe(truth)
+        r = model.recognise(obs)
+        p = robot.perceive(drives.values, with_intention[world.code][r.intention])
+        for t in range(iterations):
+            a = robot.select(p, t)
+            before = world.execute(a)  # the true world
+            body.apply_action(before, a)
+            drives.apply_action(p.code, a)  # the perceived world of tick t
+            true_it = human.intention
+            resp = human.respond(a)
+            model.learn(obs, resp.clarified)
+            drives.apply_feedback(resp.feedback)
+            after_action = None
+            if span_action or sample_after_action:
+                drives.set_body(body.values)
+                after_action = tuple(drives.values)
+            body.apply_time()
+            # the robot's NAch grows while it believes an intention is pending (Table 4.2, open `nach_growth`)
+            drives.apply_time(r.intention != 0 or resp.feedback != 0, resp.satisfied)
+            drives.set_body(body.values)
+            human.advance(world.code)
+            world.set_human(human.present, human.intention)
+            obs_next = human.observe(truth)
+            r_next = model.recognise(obs_next)
+            p_next = robot.perceive(drives.values, with_intention[world.code][r_next.intention])
+            learned = robot.learn(p, a, after_action if span_action else p_next.drives, resp.feedback,
+                                  resp.proposal, p_next, t)
+            rec.record(after_action if sample_after_action else p_next.drives, true_it != 0, resp.satisfied)
+            hits.append(r.intention == true_it)
+            if keep_actions:
+                actions.append(a)
+            if trace is not None:
+                line = trace_line(sc, t, p, a, resp, learned)
+                line |= {"true_intention": sc.intention_names[true_it] if true_it else None,
+                         "confidence": r.confidence, "clarified": sc.intention_names[resp.clarified]
+                         if resp.clarified is not None else None}
+                trace.write(json.dumps(line) + "\n")
+            if on_tick is not None:
+                on_tick(t)
+            p, obs, r = p_next, obs_next, r_next
+        metrics = rec.summary()
+        metrics["intention_accuracy"] = accuracy_ends(hits)
+        return EpisodeResult(self.cfg.seed, metrics, rec.series() if self.cfg.series else None, self.load_report,
+                             actions, hits)
+
+
+def make_intention_model(sc: Scenario, cfg: RunConfig):
+    """The recogniser of a run: None in oracle mode (the fast loop reads the intention itself)."""
+    if cfg.intention not in INTENTION_MODES:
+        raise ValueError(f"unknown intention mode {cfg.intention!r}; known: {', '.join(INTENTION_MODES)}")
+    if cfg.intention == "oracle":
+        if cfg.load_intention or cfg.save_intention:
+            raise ValueError("--load-intention/--save-intention need --intention bayes")
+        return None
+    from homeo_intention.model import IntentionModel
+
+    model = IntentionModel(sc)
+    if cfg.load_intention:
+        model.load(cfg.load_intention)
+    return model
 
 
 def make_robot(sc: Scenario, cfg: RunConfig):
@@ -181,6 +280,8 @@ def run_episode(cfg: RunConfig, sc: Scenario | None = None, on_tick=None, keep_a
             "iterations": cfg.iterations, "seed": cfg.seed, "policy": cfg.policy, "adaptive_dod": cfg.adaptive_dod,
             "dod": getattr(robot, "dod", None), "xi": getattr(robot, "xi", None),
             "pseudo_update": getattr(robot, "pseudo", None)})
+    if cfg.save_intention and sim.model is not None:
+        sim.model.save(cfg.save_intention, meta={"iterations": cfg.iterations, "seed": cfg.seed})
     return res
 
 
@@ -193,5 +294,5 @@ def run_seeds(cfg: RunConfig, seeds: Iterable[int], workers: int | None = None,
     """Run one episode per seed, on ``workers`` processes; results come back in seed order."""
     from .parallel import parallel_map
 
-    cfgs = [replace(cfg, seed=s, trace=None, save_q=None) for s in seeds]
+    cfgs = [replace(cfg, seed=s, trace=None, save_q=None, save_intention=None) for s in seeds]
     return parallel_map(_run_one, cfgs, workers, on_done)

@@ -16,7 +16,7 @@ from homeo_decision.scenario import Scenario
 
 from .body import SimBody
 from .human import NO_RESPONSE, SimHuman
-from .metrics import MetricRecorder
+from .metrics import MetricRecorder, accuracy_ends
 from .world import World
 
 
@@ -27,9 +27,10 @@ class StepResult:
 
 
 class SimCore:
-    def __init__(self, sc: Scenario, seed: int = 0):
+    def __init__(self, sc: Scenario, seed: int = 0, intention_accuracy: bool = False):
         self.sc = sc
         self.seed = seed
+        self.intention_accuracy = intention_accuracy  # report how often the robot recognised the intention
         self.reset(seed)
 
     def reset(self, seed: int | None = None) -> None:
@@ -41,6 +42,7 @@ class SimCore:
         self.body = SimBody(sc)
         self.rec = MetricRecorder(sc.drive_names, [d.threshold for d in sc.drives])
         self.tick = 0
+        self.hits: list[bool] = []
         self._truth: tuple[bool, bool] | None = None  # (expressed, satisfied) of the last step
         self.human.advance(self.world.code)  # Algorithm 2 lines 1-6: the first intention
         self.world.set_human(self.human.present, self.human.intention)
@@ -60,11 +62,14 @@ class SimCore:
         return out
 
     # -- one tick -------------------------------------------------------------------
-    def step(self, action: int | None) -> StepResult:
-        """Execute the action of this tick (None: the robot did nothing) and move to the next tick."""
+    def step(self, action: int | None, recognised: str | None = None) -> StepResult:
+        """Execute the action of this tick (None: the robot did nothing) and move to the next tick.
+        ``recognised`` is the intention the robot acted for, scored against the human's."""
         sc, world, human, body = self.sc, self.world, self.human, self.body
         names = sc.intention_names
         intention = human.intention
+        if recognised is not None:
+            self.hits.append(recognised == names[intention])
         expressed = intention != 0
         if action is not None:
             before = world.execute(action)
@@ -99,4 +104,7 @@ class SimCore:
         self.rec.record(drives, expressed, satisfied)
 
     def metrics(self) -> dict:
-        return self.rec.summary()
+        out = self.rec.summary()
+        if self.intention_accuracy and self.hits:
+            out["intention_accuracy"] = accuracy_ends(self.hits)
+        return out

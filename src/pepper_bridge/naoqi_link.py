@@ -1,0 +1,244 @@
+"""The connection to the robot: a qi.Session, service proxies, memory subscribers, reconnection.
+
+A supervisor thread owns the connection. It connects (``qi.Session().connect(url)``, with
+``tcps://`` + user/password through a client authenticator factory for NAOqi 2.9), creates
+the proxies and one ``ALMemory.subscriber(key)`` per event key, and hands every event
+value to ``on_event(key, value)`` (called on qi threads: it must only queue). Where the
+robot refuses ``subscriber``, the key is polled with ``getData`` every ``poll_period`` and a
+changed value counts as an event. When the session drops (``disconnected`` signal or a
+failed call) the supervisor reports it through ``on_status``, tears the proxies down and
+retries with exponential back-off, re-creating proxies and subscribers.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from functools import partial
+from typing import Any, Callable
+
+import qi
+
+from .config import LinkSettings
+
+SERVICES = ("ALMemory", "ALBattery", "ALMotion", "ALNavigation", "ALTextToSpeech", "ALSpeechRecognition",
+            "ALVoiceEmotionAnalysis")
+REQUIRED = ("ALMemory", "ALMotion", "ALTextToSpeech")
+CLIENT_NAME = "homeo_pepper_bridge"
+_MISSING = object()
+
+
+class RobotUnavailable(RuntimeError):
+    """The robot is not connected (or dropped during the call)."""
+
+
+class _Authenticator:
+    def __init__(self, user: str, password: str):
+        self.user, self.password = user, password
+
+    def initialAuthData(self):  # noqa: N802 (libqi's name)
+        return {"user": self.user, "token": self.password}
+
+
+class _AuthenticatorFactory:
+    def __init__(self, user: str, password: str):
+        self.user, self.password = user, password
+
+    def newAuthenticator(self):  # noqa: N802 (libqi's name)
+        return _Authenticator(self.user, self.password)
+
+
+class NaoqiLink:
+    def __init__(self, settings: LinkSettings, event_keys: list[str], on_event: Callable[[str, Any], None],
+                 on_status: Callable[[dict], None] | None = None, on_connect: Callable[["NaoqiLink"], None] | None = None):
+        self.s = settings
+        self.event_keys = list(event_keys)
+        self.on_event = on_event
+        self.on_status = on_status or (lambda st: None)
+        self.on_connect = on_connect
+        self._lock = threading.RLock()
+        self._stop = threading.Event()
+        self._wake = threading.Event()
+        self._up = threading.Event()
+        self._thread: threading.Thread | None = None
+        self.session: qi.Session | None = None
+        self.proxies: dict[str, Any] = {}
+        self._subs: list = []
+        self.polled: list[str] = []
+        self._last_polled: dict[str, Any] = {}
+        self.state = "idle"
+        self.reason = ""
+        self.connects = 0
+        self.drops = 0
+        self._generation = 0
+
+    # -- public ---------------------------------------------------------------------
+    def start(self, wait: float | None = None) -> bool:
+        if self._thread is None:
+            self._thread = threading.Thread(target=self._run, daemon=True, name="pepper-link")
+            self._thread.start()
+        return self.wait_connected(wait) if wait else self.connected
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._wake.set()
+        if self._thread is not None:
+            self._thread.join(timeout=5.0)
+            self._thread = None
+        self._teardown()
+        self._set_state("stopped", "stopped by the caller")
+
+    @property
+    def connected(self) -> bool:
+        return self._up.is_set()
+
+    def wait_connected(self, timeout: float) -> bool:
+        return self._up.wait(timeout)
+
+    def status(self) -> dict:
+        return {"state": self.state, "connected": self.connected, "reason": self.reason, "url": self.s.url,
+                "connects": self.connects, "drops": self.drops, "polled_keys": list(self.polled)}
+
+    def has(self, service: str) -> bool:
+        return service in self.proxies
+
+    def call(self, service: str, method: str, *args) -> Any:
+        """A blocking call on the robot; a dropped link raises RobotUnavailable (and wakes the supervisor)."""
+        with self._lock:
+            proxy = self.proxies.get(service) if self.connected else None
+        if proxy is None:
+            if not self.connected:
+                raise RobotUnavailable(f"robot not connected ({self.reason or self.state})")
+            raise RobotUnavailable(f"service {service} is not available on this robot")
+        try:
+            return getattr(proxy, method)(*args)
+        except RuntimeError as exc:
+            if self.session is None or not self.session.isConnected():
+                self._lost(f"{service}.{method}: {exc}")
+                raise RobotUnavailable(f"robot dropped during {service}.{method}") from None
+            raise
+
+    # -- supervisor -----------------------------------------------------------------
+    def _run(self) -> None:
+        backoff = self.s.backoff_initial
+        while not self._stop.is_set():
+            if not self.connected:
+                self._set_state("connecting", f"connecting to {self.s.url}")
+                try:
+                    self._connect()
+                except Exception as exc:  # any failure: retry later
+                    self._teardown()
+                    self._set_state("disconnected", f"connect failed: {_msg(exc)}; retry in {backoff:.2f} s")
+                    self._stop.wait(backoff)
+                    backoff = min(self.s.backoff_max, backoff * self.s.backoff_factor)
+                    continue
+                backoff = self.s.backoff_initial
+            self._wake.wait(self.s.poll_period if self.polled else 1.0)
+            self._wake.clear()
+            if self._stop.is_set():
+                break
+            if self.connected and self.session is not None and not self.session.isConnected():
+                self._lost("session reports disconnected")
+            if not self.connected:
+                self._teardown()
+                continue
+            if self.polled:
+                self._poll()
+
+    def _connect(self) -> None:
+        s = qi.Session()
+        if self.s.user:
+            s.setClientAuthenticatorFactory(_AuthenticatorFactory(self.s.user, self.s.password or ""))
+        fut = s.connect(self.s.url, _async=True)
+        try:
+            fut.value(int(self.s.connect_timeout * 1000))
+        except Exception:
+            fut.cancel()
+            raise
+        if not fut.isFinished() or fut.hasError():
+            raise RuntimeError(fut.error() if fut.hasError() else "connect timed out")
+        self._generation += 1
+        gen = self._generation
+        s.disconnected.connect(partial(self._on_disconnected, gen))
+        proxies = {}
+        for name in SERVICES:
+            try:
+                proxies[name] = s.service(name)
+            except RuntimeError:
+                if name in REQUIRED:
+                    raise RuntimeError(f"required service {name} missing on the robot") from None
+        mem = proxies["ALMemory"]
+        subs, polled = [], []
+        for key in self.event_keys:
+            try:
+                sub = mem.subscriber(key)
+                sub.signal.connect(partial(self._event, gen, key))
+                subs.append(sub)
+            except RuntimeError:
+                polled.append(key)
+        with self._lock:
+            self.session, self.proxies, self._subs = s, proxies, subs
+            self.polled = polled
+            self._last_polled = {}
+            for key in polled:
+                self._last_polled[key] = self._get_or_missing(key)
+        self.connects += 1
+        self._up.set()
+        self._set_state("connected", f"connected to {self.s.url}" + (f"; polling {len(polled)} event keys" if polled else ""))
+        if self.on_connect is not None:
+            self.on_connect(self)
+
+    def _get_or_missing(self, key: str) -> Any:
+        try:
+            return self.proxies["ALMemory"].getData(key)
+        except RuntimeError:
+            return _MISSING
+
+    def _poll(self) -> None:
+        for key in list(self.polled):
+            try:
+                v = self.proxies["ALMemory"].getData(key)
+            except RuntimeError:
+                if self.session is None or not self.session.isConnected():
+                    self._lost("poll failed: session down")
+                    return
+                continue
+            if v != self._last_polled.get(key, _MISSING):
+                self._last_polled[key] = v
+                self.on_event(key, v)
+
+    def _event(self, gen: int, key: str, value: Any) -> None:  # qi thread
+        if gen == self._generation:
+            self.on_event(key, value)
+
+    def _on_disconnected(self, gen: int, reason: Any = "") -> None:  # qi thread: only flag it
+        if gen == self._generation:
+            self._lost(f"robot disconnected ({reason})")
+
+    def _lost(self, reason: str) -> None:
+        if self._up.is_set():
+            self._up.clear()
+            self.drops += 1
+            self._set_state("disconnected", reason)
+        self._wake.set()
+
+    def _teardown(self) -> None:
+        with self._lock:
+            s, self.session = self.session, None
+            self.proxies, self._subs = {}, []
+        if s is not None:
+            try:
+                s.close()
+            except Exception:
+                pass
+
+    def _set_state(self, state: str, reason: str) -> None:
+        self.state, self.reason = state, reason
+        try:
+            self.on_status(self.status())
+        except Exception:
+            pass
+
+
+def _msg(exc: BaseException) -> str:
+    return str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__

@@ -1,0 +1,197 @@
+"""The stand-in's scripted user (no qi import): a file of interactions and timed events.
+
+A user file (``scripts/*.json``, schema ``homeo-pepper-user``)::
+
+    {"schema": "homeo-pepper-user", "version": 1,
+     "start": {"battery_percent": 30, "location": "R", "presence": "present", "heat": 0.0},
+     "robot": {"drives": {"NAch": 70, "NSoc": 40}},
+     "interactions": [
+        {"intention": "light", "gesture": "point_up", "words": ["light"], "praise": false},
+        {"intention": null},
+        {"intention": "music", "words": ["music"], "patience": 2, "proposal": "Play"},
+        {"presence": "absent"}
+     ],
+     "timed": [{"at": 1.5, "touch": "FrontTactilTouched"}, {"at": 2.0, "anger": 0.9},
+               {"at": 2.5, "words": [["Play", 0.8]]}, {"at": 3.0, "presence": "far"}]}
+
+Interactions are reactive, one per robot action: the user expresses the intention (a gesture
+event, a movement event, one ``WordRecognized`` per word), watches what the robot does, and
+answers: a head touch when the robot did a desired action and ``praise`` (default true); an
+angry voice (``EmotionRecognized`` with anger ``anger``, default 0.9) otherwise when ``scold``
+(default true), with the proposal spoken (``WordRecognized``) when ``propose`` (default
+true). A missed intention is expressed again, up to ``patience`` attempts (default 1). An
+interaction with ``"intention": null`` expresses nothing and answers nothing. ``presence``
+("present" / "absent") moves the user before expressing. ``helps`` (default true, per interaction or for the whole
+file): asked for help with the charger (Attach / Detach), the user plugs / unplugs the robot when it stands at
+the charger. ``start`` sets the stand-in body; ``robot`` holds the robot's initial internal
+drives for the field driver. Timed entries fire at ``at`` wall seconds after the user starts
+(when the robot first starts its speech recognition).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+from .mapping import EMOTION_EVENT, TOUCH_EVENTS, WORD_EVENT
+
+SCHEMA = "homeo-pepper-user"
+VERSION = 1
+
+
+class ScriptError(ValueError):
+    pass
+
+
+@dataclass
+class Reaction:
+    emits: list  # (event key, value) in order
+    plug: bool | None = None  # True: the user plugs the robot in, False: unplugs, None: nothing
+
+
+@dataclass
+class ScriptedUser:
+    script: dict
+    desired: Mapping[str, tuple]  # intention -> desired actions (from the scenario)
+    gesture_event: str = "PepperBridge/Gesture"
+    movement_event: str = "PepperBridge/Movement"
+    index: int = 0
+    attempts: int = 0
+    present: bool = True
+    started: bool = False
+    log: list = field(default_factory=list)  # one row per judged robot action
+
+    def __post_init__(self):
+        self.items = list(self.script.get("interactions", []))
+        self.present = self.script.get("start", {}).get("presence", "present") == "present"
+
+    @property
+    def done(self) -> bool:
+        return self.index >= len(self.items)
+
+    @property
+    def current(self) -> dict | None:
+        return None if self.done else self.items[self.index]
+
+    def start(self) -> list:
+        """The first interaction's expression."""
+        self.started = True
+        return self._express()
+
+    def _express(self) -> list:
+        it = self.current
+        if it is None:
+            return []
+        if "presence" in it:
+            self.present = it["presence"] == "present"
+        if not self.present or it.get("intention") is None:
+            return []
+        out = []
+        if it.get("gesture"):
+            out.append((self.gesture_event, it["gesture"]))
+        if it.get("movement"):
+            out.append((self.movement_event, it["movement"]))
+        for w in it.get("words", []):
+            out.append((WORD_EVENT, [w, 0.9]))
+        return out
+
+    def react(self, action: str, location: str | None) -> Reaction:
+        """The user's answer to a robot action it saw, then its next expression."""
+        it = self.current
+        plug = None
+        helps = (it or {}).get("helps", self.script.get("helps", True))
+        if action in ("Attach", "Detach") and helps and self.present and location == "C":
+            plug = action == "Attach"
+        if it is None or not self.started:
+            return Reaction([], plug)
+        intention = it.get("intention") if self.present else None
+        emits: list = []
+        row = {"interaction": len(self.log) + 1, "item": self.index, "intention": intention, "action": action, "satisfied": None,
+               "feedback": 0, "proposal": None}
+        if intention is None:
+            self._next()
+        elif action in self.desired.get(intention, ()):
+            row["satisfied"] = True
+            if it.get("praise", True):
+                emits += [(TOUCH_EVENTS[1], 1.0), (TOUCH_EVENTS[1], 0.0)]
+                row["feedback"] = 1
+            self._next()
+        else:
+            row["satisfied"] = False
+            if it.get("scold", True):
+                anger = float(it.get("anger", 0.9))
+                emits.append((EMOTION_EVENT, [[2, anger], [round(1 - anger, 3), anger, 0.0, 0.0, 0.0], 0.5]))
+                row["feedback"] = -1
+                if it.get("propose", True):
+                    prop = it.get("proposal") or self.desired[intention][0]
+                    emits.append((WORD_EVENT, [prop, 0.9]))
+                    row["proposal"] = prop
+            self.attempts += 1
+            if self.attempts >= int(it.get("patience", 1)):
+                self._next()
+        self.log.append(row)
+        emits += self._express()
+        return Reaction(emits, plug)
+
+    def _next(self):
+        self.index += 1
+        self.attempts = 0
+
+
+def timed_entry_emits(entry: Mapping[str, Any], gesture_event: str, movement_event: str) -> list:
+    """The events one timed entry raises (presence is handled by the stand-in)."""
+    out = []
+    if "touch" in entry:
+        out += [(entry["touch"], 1.0), (entry["touch"], 0.0)]
+    if "anger" in entry:
+        a = float(entry["anger"])
+        out.append((EMOTION_EVENT, [[2, a], [round(1 - a, 3), a, 0.0, 0.0, 0.0], 0.5]))
+    if "words" in entry:
+        flat = []
+        for w in entry["words"]:
+            flat += list(w) if isinstance(w, (list, tuple)) else [w, 0.9]
+        out.append((WORD_EVENT, flat))
+    if "gesture" in entry:
+        out.append((gesture_event, entry["gesture"]))
+    if "movement" in entry:
+        out.append((movement_event, entry["movement"]))
+    if "event" in entry:  # any raw key/value
+        out.append((entry["event"], entry.get("value")))
+    return out
+
+
+def load_script(path: str | Path) -> dict:
+    p = Path(path)
+    if not p.exists() and not p.is_absolute():
+        from .config import SCRIPTS_DIR
+
+        if (SCRIPTS_DIR / p).exists():
+            p = SCRIPTS_DIR / p
+    try:
+        raw = json.loads(p.read_text())
+    except FileNotFoundError:
+        raise ScriptError(f"user script not found: {p}") from None
+    except json.JSONDecodeError as exc:
+        raise ScriptError(f"{p}: not valid JSON (line {exc.lineno}: {exc.msg})") from None
+    return validate_script(raw, str(p))
+
+
+def validate_script(raw: Any, where: str = "<memory>", intentions: tuple | None = None) -> dict:
+    if not isinstance(raw, dict) or raw.get("schema") != SCHEMA:
+        raise ScriptError(f"{where}: 'schema' must be {SCHEMA!r}")
+    if raw.get("version") != VERSION:
+        raise ScriptError(f"{where}: unsupported version {raw.get('version')!r}")
+    items = raw.get("interactions", [])
+    if not isinstance(items, list) or not all(isinstance(i, dict) for i in items):
+        raise ScriptError(f"{where}: 'interactions' must be a list of objects")
+    for k, it in enumerate(items):
+        if intentions is not None and it.get("intention") is not None and it["intention"] not in intentions:
+            raise ScriptError(f"{where}: interaction {k + 1}: unknown intention {it['intention']!r}")
+        if it.get("presence", "present") not in ("present", "absent"):
+            raise ScriptError(f"{where}: interaction {k + 1}: presence must be 'present' or 'absent'")
+    timed = raw.get("timed", [])
+    if not isinstance(timed, list) or not all(isinstance(t, dict) and isinstance(t.get("at"), (int, float)) for t in timed):
+        raise ScriptError(f"{where}: 'timed' entries need a number 'at'")
+    return raw

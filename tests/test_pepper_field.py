@@ -1,0 +1,81 @@
+"""The field test (thesis Section 4.3, Tables 4.7 and 4.8) on the stand-in Pepper over libqi.
+
+The Q-tables are the ends of the default simulation (5000 iterations, seed 0) at DoD 0.25 and
+at DoD 0; the robots start nearly depleted and meet the same scripted user.
+"""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+qi = pytest.importorskip("qi")
+
+from pepper_bridge import field  # noqa: E402
+from pepper_bridge.user import load_script  # noqa: E402
+
+pytestmark = pytest.mark.qi
+qi.logging.setLevel(qi.logging.WARNING)
+SEEDS = (0, 1, 2)
+
+
+@pytest.fixture(scope="module")
+def qtables(tmp_path_factory):
+    d = tmp_path_factory.mktemp("q")
+    return {label: str(field.train_q(d / f"{label}.json", dod)) for label, dod in field.DODS}
+
+
+def run_pair(script, seed, qtables, thesis):
+    return [field.run_field(script, dod, seed, qtables[label], label=label, scenario=thesis)
+            for label, dod in field.DODS]
+
+
+@pytest.mark.slow
+def test_dedicated_satisfies_more_and_selfish_charges_earlier(qtables, thesis):
+    script = load_script("field_user.json")
+    n = len(script["interactions"])
+    sat = {"dedicated": 0, "selfish": 0}
+    attach = {"dedicated": 0, "selfish": 0}
+    for seed in SEEDS:
+        for res in run_pair(script, seed, qtables, thesis):
+            s = res.summary()
+            assert s["intentions"] == n - 2  # two pauses
+            sat[res.label] += s["satisfied"]
+            attach[res.label] += s["first_attach"] or (s["interactions"] + 1)  # never = after the session
+    assert sat["dedicated"] > sat["selfish"], sat
+    assert attach["selfish"] < attach["dedicated"], attach
+
+
+def test_table_4_7_user_gives_one_row_per_interaction(qtables, thesis):
+    ded, selfish = run_pair("field_dedicated.json", 0, qtables, thesis)
+    for res in (ded, selfish):
+        assert [r["interaction"] for r in res.log] == list(range(1, 11))
+        for r in res.log:
+            assert set(r) >= {"m_dom", "intention", "action", "feedback", "proposal"}
+            assert r["feedback"] in (-1, 0, 1)
+            if r["feedback"] == -1:  # every scolding of this user proposes the desired action
+                assert r["proposal"] is not None
+        # the intentions the robot recognised are the user's, in the table's order
+        assert [r["intention"] for r in res.log] == [
+            "light", "no_light", "come", "music", None, "no_music", "light", "music", "leave", None]
+        assert res.log[0]["m_dom"] == "Serving"  # NAch 70 + 20 > NEng 65
+        assert res.diagnostics["rejected_total"] == 0
+    table = field.side_by_side(ded, selfish)
+    assert "dedicated (DoD 0.25, seed 0)" in table and "selfish (DoD 0.0, seed 0)" in table
+
+
+def test_field_run_is_reproducible(qtables, thesis):
+    a = field.run_field("field_selfish.json", 0.0, 5, qtables["selfish"], scenario=thesis)
+    b = field.run_field("field_selfish.json", 0.0, 5, qtables["selfish"], scenario=thesis)
+    strip = lambda log: [{k: r[k] for k in ("m_dom", "intention", "action", "feedback", "proposal", "drives")} for r in log]  # noqa: E731
+    assert strip(a.log) == strip(b.log) and a.user_log == b.user_log
+
+
+def test_field_cli_json(qtables, capsys):
+    assert field.main(["--script", "field_selfish.json", "--seeds", "1", "--json",
+                       "--q-dedicated", qtables["dedicated"], "--q-selfish", qtables["selfish"]]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert [r["summary"]["label"] for r in out[0]["robots"]] == ["dedicated", "selfish"]
+    assert all(set(row) >= {"m_dom", "intention", "action", "feedback", "proposal"}
+               for r in out[0]["robots"] for row in r["log"])
