@@ -121,3 +121,18 @@ def test_bus_graph_equals_the_runner_with_bayesian_recognition(thesis):
     ref = run_episode(RunConfig(iterations=n, seed=2, intention="bayes"), thesis, keep_actions=True)
     assert actions == [thesis.actions[a].name for a in ref.actions]
     assert metrics == ref.metrics and "intention_accuracy" in metrics
+
+
+def test_the_recogniser_stage_rejects_unknown_symbols_and_hides_the_truth(thesis):
+    from homeo_intention.observation import UnknownObservation
+
+    st = RecogniserStage(thesis, "bayes")
+    with pytest.raises(UnknownObservation, match="unknown gesture 'moonwalk'"):
+        st.check({"gesture": "moonwalk", "movement": None, "keyword": None})
+    # the Bayesian mode never reads the true intention: same cues, same answer
+    cues = {"gesture": None, "movement": None, "keyword": None}
+    a = st.tick(dict(cues, intention="come"), None)
+    b = RecogniserStage(thesis, "bayes").tick(dict(cues, intention="light"), None)
+    assert a == b
+    with pytest.raises(UnknownObservation, match="needs the intention"):
+        RecogniserStage(thesis, "oracle").check(cues)

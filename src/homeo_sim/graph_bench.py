@@ -54,29 +54,34 @@ def cmd_bench(args) -> int:
     and noisy: a single pair can be off by a factor of two either way)."""
     import statistics
 
-    graph, floor, crit, rss, missed = [], [], [], [], 0
+    graph, oracle, floor, crit, rss, missed = [], [], [], [], [], 0
     for r in range(args.rounds):
         st = run_graph(SimOptions(iterations=args.iterations), quiet=True)
         graph.append(st["elapsed_s"] / args.iterations)
+        oracle.append(run_graph(SimOptions(iterations=args.iterations, intention="oracle"),
+                                quiet=True)["elapsed_s"] / args.iterations)
         rss.append(st["rss_mb"])
         missed += st["missed"]
         floor.append(floor_s_per_tick(args.iterations, HOPS))
         crit.append(floor_s_per_tick(args.iterations, CRITICAL_HOPS))
         if not args.json:
-            print(f"round {r + 1}: graph {graph[-1] * 1e3:.3f} ms/tick, floor {floor[-1] * 1e3:.3f} ms/tick "
+            print(f"round {r + 1}: graph {graph[-1] * 1e3:.3f} ms/tick (oracle {oracle[-1] * 1e3:.3f}), floor {floor[-1] * 1e3:.3f} ms/tick "
                   f"({HOPS} hops), {crit[-1] * 1e3:.3f} ms/tick ({CRITICAL_HOPS} hops)", file=sys.stderr)
     g, f, c = statistics.median(graph), statistics.median(floor), statistics.median(crit)
+    o = statistics.median(oracle)
     out = {"graph_s_per_tick": g, "floor_s_per_tick": f, "ratio": g / f, "rss_mb": max(rss),
            "hops": HOPS, "rounds": args.rounds, "ratio_per_round": [a / b for a, b in zip(graph, floor)],
-           "critical_path_floor_s_per_tick": c, "critical_path_ratio": g / c}
+           "critical_path_floor_s_per_tick": c, "critical_path_ratio": g / c,
+           "oracle_graph_s_per_tick": o, "bayes_to_oracle": g / o}
     if args.json:
         print(json.dumps(out))
     else:
-        print(f"graph, lockstep            : {g * 1e3:7.3f} ms/tick (median of {args.rounds} x {args.iterations} "
+        print(f"graph (bayes), lockstep    : {g * 1e3:7.3f} ms/tick (median of {args.rounds} x {args.iterations} "
               f"ticks, {missed} missed)")
         print(f"floor, {HOPS} rclpy hops       : {f * 1e3:7.3f} ms/tick")
         print(f"ratio graph / floor        : {g / f:7.2f}  (target <= 2; per round: "
               f"{', '.join(f'{x:.2f}' for x in out['ratio_per_round'])})")
         print(f"critical path only, {CRITICAL_HOPS} hops: {c * 1e3:7.3f} ms/tick, ratio {g / c:.2f}")
+        print(f"oracle intention graph     : {o * 1e3:7.3f} ms/tick; Bayesian recognition costs x{g / o:.2f}")
         print(f"graph resident memory      : {max(rss):7.0f} MiB (4 node processes)")
     return 0
