@@ -286,7 +286,7 @@ def test_homeo_topic_echo_list_pub_param_and_call():
         assert r.returncode == 0, r.stderr
         msg = json.loads(r.stdout)
         assert msg["schema"] == "homeo/drives" and msg["m_dom"] in ("Serving", "Social", "Relaxative", "Survival")
-        r = _cli("homeo_msgs_py.topic_cli", "list", domain=d)
+        r = _cli("homeo_msgs_py.topic_cli", "list", "--wait", "8", domain=d)
         assert r.returncode == 0 and "homeo_decision" in r.stdout and "/homeo/outcome" in r.stdout
         r = _cli("homeo_msgs_py.topic_cli", "param", "/homeo_decision", "dod", "0.3", domain=d)
         assert r.returncode == 0, r.stderr

@@ -19,7 +19,7 @@ with warnings.catch_warnings():
     from pgmpy.factors.discrete import TabularCPD
     from pgmpy.inference import VariableElimination
     from pgmpy.models import DiscreteBayesianNetwork
-    from pgmpy.parameter_estimator import DiscreteBayesianEstimator, DiscreteEM, DiscreteMLE
+    from pgmpy.parameter_estimator import DiscreteBayesianEstimator, DiscreteEM
 
 CH = ("gesture", "movement", "keyword")
 

@@ -126,14 +126,18 @@ class HomeoNode(Node):
     def publish_diagnostics(self) -> None:
         from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
-        st = self.rejects.status()
         arr = DiagnosticArray()
         arr.header.stamp = self.get_clock().now().to_msg()
         arr.status = [DiagnosticStatus(level=bytes([st["level"]]), name=st["name"], message=st["message"],
                                        hardware_id=st["hardware_id"],
-                                       values=[KeyValue(key=k, value=v) for k, v in st["values"].items()])]
+                                       values=[KeyValue(key=k, value=v) for k, v in st["values"].items()])
+                      for st in [self.rejects.status(), *self.extra_statuses()]]
         self._diag_pub.publish(arr)
         self.rejects.changed = False
+
+    def extra_statuses(self) -> list[dict]:
+        """More DiagnosticStatus dicts (level, name, message, hardware_id, values) a node reports."""
+        return []
 
 
 def load_node_scenario(path: str, overrides: str):

@@ -269,7 +269,7 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--set", metavar="KEY=VALUE", action="append", default=[], help="open-choice override")
 
     ls = sub.add_parser("list", help="nodes and topics with their writers and readers")
-    ls.add_argument("--wait", type=float, default=2.0, help="seconds of discovery before listing (default 2)")
+    ls.add_argument("--wait", type=float, default=3.0, help="seconds of discovery before listing (default 3)")
     e = sub.add_parser("echo", help="print a topic's messages as JSON")
     e.add_argument("topic")
     e.add_argument("--count", type=int, default=0, help="stop after N messages (default: until Ctrl-C)")

@@ -3,7 +3,8 @@
     homeo-launch sim [--iterations N (0 = until Ctrl-C)] [--rate HZ] [--seed S] [--dod X] [--xi X]
                      [--no-pseudo] [--scenario FILE] [--set KEY=VALUE] [--load-q FILE] [--save-q FILE]
                      [--trace FILE] [--json] [--quiet] [--log-dir DIR]
-    homeo-launch bench [--iterations N] [--json]
+    homeo-launch pepper [--qi-url URL | --standin --script FILE] [--q-table FILE] [--dod X] [--json]
+    homeo-launch bench [--iterations N] [--rounds R] [--json]
 
 ``sim`` starts homeo_sim, homeo_intention, homeo_drives and homeo_decision, waits until all
 are discovered and matched, shows progress, and prints the metrics of ``homeo-sim run``
@@ -156,7 +157,7 @@ def expected_endpoints(o: SimOptions) -> dict:
 def wait_until_up(graph: Graph, mon: Monitor, nodes, endpoints, bound: float) -> None:
     end = time.monotonic() + bound
     while True:
-        _check_alive(graph)
+        check_alive(graph)
         missing = mon.missing(nodes, endpoints)
         if not missing:
             return
@@ -165,7 +166,7 @@ def wait_until_up(graph: Graph, mon: Monitor, nodes, endpoints, bound: float) ->
         mon.spin(0.1)
 
 
-def _check_alive(graph: Graph) -> None:
+def check_alive(graph: Graph) -> None:
     dead = graph.dead()
     if dead:
         name, code = dead
@@ -189,7 +190,7 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
         last_tick = -1
         while True:
             mon.spin(0.05)
-            _check_alive(graph)
+            check_alive(graph)
             st = mon.status
             if st is None:
                 continue
@@ -271,6 +272,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--log-dir", metavar="DIR", help="keep each node's log here (default: a temporary directory)")
     s.add_argument("--json", action="store_true", help="print the metrics as homeo-sim run --json does")
     s.add_argument("--quiet", action="store_true", help="no progress bar")
+    from pepper_bridge.launch_pepper import add_parser as add_pepper
+
+    add_pepper(sub)
     b = sub.add_parser("bench", help="seconds per tick of the graph against a raw rclpy chain (the floor)")
     b.add_argument("--iterations", type=_int_at_least(10), default=1000, help="ticks of each (default 1000)")
     b.add_argument("--rounds", type=_int_at_least(1), default=3, help="alternating graph/floor pairs (default 3)")
@@ -354,6 +358,10 @@ def main(argv=None) -> int:
         args = ap.parse_args(argv)
         if args.cmd == "sim":
             return cmd_sim(args)
+        if args.cmd == "pepper":
+            from pepper_bridge.launch_pepper import cmd_pepper
+
+            return cmd_pepper(args)
         from .graph_bench import cmd_bench
 
         return cmd_bench(args)

@@ -20,10 +20,8 @@ import argparse
 import json
 import sys
 import tempfile
-import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 from homeo_decision import qtable_io
 from homeo_decision.agent import DecisionCore, Percept

@@ -13,7 +13,7 @@ retries with exponential back-off, re-creating proxies and subscribers.
 from __future__ import annotations
 
 import threading
-import time
+
 from functools import partial
 from typing import Any, Callable
 

@@ -1,0 +1,483 @@
+"""``homeo-launch pepper``: the node graph with the Pepper bridge in place of ``homeo_sim``.
+
+    homeo-launch pepper [--qi-url URL [--user U --password P] | --standin [--script FILE]]
+                        [--q-table FILE] [--dod X] [--interactions N] [--seed S] [--json]
+    homeo-launch pepper --field [--script FILE] [--q-dedicated FILE --q-selfish FILE | --q-table FILE] [--seed S]
+
+Starts ``pepper_bridge``, ``homeo_intention``, ``homeo_drives`` and ``homeo_decision`` as
+processes (and, with ``--standin``, a stand-in Pepper as its own process on loopback), waits
+until all are up, prints each interaction as it happens and at the end the interaction log
+(m_dom, intention, action, feedback, proposal) as a table or, with ``--json``, as JSON.
+
+With a Q-table the decision node loads it and keeps learning in the last phase of the
+scenario's schedule (alpha 0.1, tau 2.0: the robot continues after its simulated training,
+as ``homeo-pepper-field`` does; ``--fresh-schedule`` starts the schedule over). The script's
+``robot.drives`` (e.g. NAch 70, NSoc 55) become the drives node's initial drives.
+
+``--field`` runs the field test through the graph: a dedicated (DoD 0.25) and a selfish
+(DoD 0) robot, each with its own stand-in, meet the same scripted user; both tables are
+printed side by side (``pepper_bridge.field.side_by_side``).
+
+Wiring (in ``homeo_sim/launch.py``)::
+
+    from pepper_bridge.launch_pepper import add_parser as add_pepper; add_pepper(sub)   # build_parser
+    if args.cmd == "pepper": return cmd_pepper(args)                                    # main
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import os
+import select
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+from homeo_msgs_py.topics import ACTION, DRIVES, INTENTION, OBSERVATION, OUTCOME, WORLD
+from homeo_sim.cli import UserError, _float_in, _int_at_least
+from homeo_sim.launch import DISCOVERY_TIMEOUT_S, MODULES, PROG, GraphError, Monitor, check_alive, wait_until_up
+from homeo_sim.processes import Graph, NodeSpec, dds_defaults, graph_env
+
+BRIDGE_NODES = ("pepper_bridge", "homeo_intention", "homeo_drives", "homeo_decision")
+STANDIN_START_S = 30.0
+FIELD_DODS = (("dedicated", 0.25), ("selfish", 0.0))
+INTENTION_MODES = {"cues": "oracle", "bayes": "bayes"}  # --intention -> the intention node's mode
+
+
+def endpoints(intention: str) -> dict:
+    """(writers, readers) per topic of the bridge graph; the Bayesian recogniser reads the outcome too."""
+    return {WORLD: (1, 1), OBSERVATION: (1, 1), INTENTION: (1, 1), DRIVES: (1, 1), ACTION: (1, 1),
+            OUTCOME: (1, 2 if intention == "bayes" else 1)}
+
+
+# -- the stand-in robot as its own process ------------------------------------------------------
+class StandinProcess:
+    """``python -m pepper_bridge.standin --listen tcp://127.0.0.1:0 ...``; its URL is the first line."""
+
+    def __init__(self, script: str | None, seed: int, time_scale: float, log_path: Path, config: str | None = None,
+                 battery: float | None = None):
+        cmd = [sys.executable, "-m", "pepper_bridge.standin", "--listen", "tcp://127.0.0.1:0", "--seed", str(seed),
+               "--time-scale", repr(float(time_scale))]
+        if script:
+            cmd += ["--script", script]
+        if config:
+            cmd += ["--config", config]
+        if battery is not None:
+            cmd += ["--battery", repr(float(battery))]
+        env = dict(os.environ, PYTHONUNBUFFERED="1")
+        self.log_path = log_path
+        self.proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                     env=env, start_new_session=True, preexec_fn=_die_with_parent)
+        self.url = self._read_url()
+        self._drain = threading.Thread(target=self._copy_output, daemon=True, name="standin-output")
+        self._drain.start()
+
+    def _read_url(self) -> str:
+        end = time.monotonic() + STANDIN_START_S
+        buf = b""
+        fd = self.proc.stdout.fileno()
+        while b"\n" not in buf:
+            left = end - time.monotonic()
+            if left <= 0 or self.proc.poll() is not None:
+                break
+            r, _, _ = select.select([fd], [], [], min(left, 0.5))
+            if r:
+                chunk = os.read(fd, 4096)
+                if not chunk:
+                    break
+                buf += chunk
+        line, _, rest = buf.partition(b"\n")
+        self._rest = rest
+        url = line.decode(errors="replace").strip()
+        if not url.startswith(("tcp://", "tcps://")):
+            self.stop()
+            raise GraphError("the stand-in robot did not start" + (f": {url or buf.decode(errors='replace')[-400:]}"
+                                                                   if url or buf else " (no URL printed)"))
+        return url
+
+    def _copy_output(self) -> None:
+        with open(self.log_path, "ab") as log:
+            log.write(self._rest)
+            for chunk in iter(lambda: self.proc.stdout.read1(4096), b""):
+                log.write(chunk)
+
+    def dead(self) -> int | None:
+        return self.proc.poll()
+
+    def user_log(self, timeout: float = 10.0) -> list:
+        """The scripted user's judgement of each robot action (HomeoStandin.userLog over qi)."""
+        import qi
+
+        qi.logging.setLevel(qi.logging.ERROR)
+        s = qi.Session()
+        try:
+            fut = s.connect(self.url, _async=True)
+            fut.value(int(timeout * 1000))
+            return [dict(r) for r in s.service("HomeoStandin").userLog()]
+        except Exception:
+            return []
+        finally:
+            try:
+                s.close()
+            except Exception:
+                pass
+
+    def stop(self) -> int | None:
+        if self.proc.poll() is None:
+            try:
+                os.killpg(self.proc.pid, 15)
+                self.proc.wait(timeout=3.0)
+            except (ProcessLookupError, PermissionError):
+                pass
+            except subprocess.TimeoutExpired:
+                os.killpg(self.proc.pid, 9)
+                self.proc.wait(timeout=2.0)
+        return self.proc.returncode
+
+
+def _die_with_parent() -> None:  # runs in the child before exec
+    try:
+        import ctypes
+
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, 15)  # PR_SET_PDEATHSIG = SIGTERM
+    except (OSError, AttributeError):
+        pass
+
+
+# -- the graph --------------------------------------------------------------------------------
+def scenario_file(path: str | None, out_dir: Path, continue_schedule: bool) -> str:
+    """The scenario the nodes load: the given (or thesis) one; with ``continue_schedule`` its
+    learning schedule is reduced to the last phase (the robot continues after its training)."""
+    from homeo_sim.scenarios import default_scenario_path
+
+    if not continue_schedule:
+        return os.path.abspath(path) if path else ""
+    src = Path(path) if path else default_scenario_path()
+    raw = json.loads(src.read_text())
+    raw = copy.deepcopy(raw)
+    last = dict(raw["learning"]["schedule"][-1], **{"from": 0})
+    raw["learning"]["schedule"] = [last]
+    dst = out_dir / "scenario.json"
+    dst.write_text(json.dumps(raw))
+    return str(dst)
+
+
+def pepper_specs(*, url: str, scenario: str, overrides: dict, seed: int, dod: float | None, q_table: str | None,
+                 interactions: int, collect_window: float, collect_quiet: float, action_timeout: float,
+                 end_with_script: bool, user: str = "", password: str = "", config: str = "",
+                 intention: str = "cues") -> list[NodeSpec]:
+    common = {"scenario": scenario, "overrides": json.dumps(overrides)}
+    decision = dict(common, seed=seed)
+    if dod is not None:
+        decision["dod"] = float(dod)
+    if q_table:
+        decision["q_table_path"] = os.path.abspath(q_table)
+        decision["load_on_start"] = True
+    bridge = dict(common, qi_url=url, user=user, password=password, config=os.path.abspath(config) if config else "",
+                  interactions=interactions, collect_window=float(collect_window), collect_quiet=float(collect_quiet),
+                  action_timeout=float(action_timeout), end_with_script=end_with_script,
+                  intention_cues=intention == "cues", outcome_readers=endpoints(intention)[OUTCOME][1])
+    return [NodeSpec("pepper_bridge", "pepper_bridge.node", bridge),
+            NodeSpec("homeo_intention", MODULES["homeo_intention"], dict(common, mode=INTENTION_MODES[intention])),
+            NodeSpec("homeo_drives", MODULES["homeo_drives"], dict(common)),
+            NodeSpec("homeo_decision", MODULES["homeo_decision"], decision)]
+
+
+def run_pepper_graph(specs: list[NodeSpec], log_dir: Path, standin: StandinProcess | None = None, on_row=None,
+                     last: dict | None = None, discovery_timeout: float = DISCOVERY_TIMEOUT_S,
+                     env: dict | None = None, intention: str = "cues") -> dict:
+    """Run the bridge graph until the bridge reports done; returns its last run status fields.
+    Raises GraphError (a node or the stand-in died, or the graph never came up) or KeyboardInterrupt."""
+    os.environ.update(dds_defaults())
+    graph = Graph(specs, env or graph_env(), str(log_dir))
+    mon = None
+    shown = 0
+    try:
+        graph.start()
+        mon = Monitor()
+        _wait_up(graph, mon, standin, endpoints(intention), discovery_timeout)
+        while True:
+            mon.spin(0.05)
+            check_alive(graph)
+            _check_standin(standin)
+            st = mon.status
+            if st is None:
+                continue
+            if last is not None:
+                last.clear()
+                last.update(st.fields)
+            rows = (st.fields.get("extra") or {}).get("log") or []
+            if on_row is not None:
+                for r in rows[shown:]:
+                    on_row(r)
+            shown = max(shown, len(rows))
+            if st.fields["done"]:
+                return dict(st.fields)
+    finally:
+        if mon is not None:
+            mon.close()
+        graph.stop()
+
+
+def _wait_up(graph, mon, standin, endpoints, bound) -> None:
+    end = time.monotonic() + bound
+    while True:
+        _check_standin(standin)
+        try:
+            return wait_until_up(graph, mon, BRIDGE_NODES, endpoints, min(1.0, max(0.0, end - time.monotonic())))
+        except GraphError:
+            if time.monotonic() > end or graph.dead():
+                raise
+
+
+def _check_standin(standin: StandinProcess | None) -> None:
+    if standin is not None and standin.dead() is not None:
+        tail = ""
+        try:
+            tail = "\n".join(standin.log_path.read_text(errors="replace").rstrip().splitlines()[-12:])
+        except OSError:
+            pass
+        raise GraphError(f"the stand-in robot exited with code {standin.dead()}" + (f"; its last output:\n{tail}"
+                                                                                    if tail else ""))
+
+
+# -- one robot ---------------------------------------------------------------------------------
+def run_robot(a, label: str, dod: float | None, q_table: str | None, log_dir: Path, on_row=None,
+              last: dict | None = None) -> dict:
+    """One graph run (with its own stand-in when asked); returns {"status", "user_log", ...}."""
+    from .user import load_script
+
+    script = None
+    overrides: dict = {}
+    if a.script:
+        script_path = _script_path(a.script)
+        raw = load_script(script_path)
+        drives = (raw.get("robot") or {}).get("drives")
+        if drives:
+            overrides["initial_drives"] = dict(drives)
+        script = str(script_path)
+    standin = None
+    try:
+        url = a.qi_url
+        if a.standin:
+            standin = StandinProcess(script, a.seed, a.time_scale, log_dir / "standin.log", a.config)
+            url = standin.url
+        sc_path = scenario_file(a.scenario, log_dir, bool(q_table) and not a.fresh_schedule)
+        specs = pepper_specs(url=url, scenario=sc_path, overrides=overrides, seed=a.seed, dod=dod, q_table=q_table,
+                             interactions=a.interactions, collect_window=a.collect_window,
+                             collect_quiet=a.collect_quiet, action_timeout=a.action_timeout,
+                             end_with_script=bool(a.standin and script), user=a.user or "",
+                             password=a.password or "", config=a.config or "", intention=a.intention)
+        status = run_pepper_graph(specs, log_dir, standin, on_row=on_row, last=last, intention=a.intention)
+        user_log = standin.user_log() if standin is not None else []
+        return {"label": label, "dod": dod, "status": status, "user_log": user_log}
+    finally:
+        if standin is not None:
+            standin.stop()
+
+
+def _script_path(s: str) -> Path:
+    from .config import SCRIPTS_DIR
+
+    p = Path(s)
+    if not p.exists() and not p.is_absolute() and (SCRIPTS_DIR / p).exists():
+        p = SCRIPTS_DIR / p
+    if not p.is_file():
+        raise UserError(f"user script not found: {s}")
+    return p.resolve()
+
+
+def field_result(run: dict, seed: int, default_dod: float | None = None):
+    from .field import FieldResult
+
+    log = (run["status"].get("extra") or {}).get("log") or []
+    dod = run["dod"] if run["dod"] is not None else default_dod
+    return FieldResult(run["label"], dod, seed, log=list(log), user_log=list(run["user_log"]))
+
+
+# -- command line ------------------------------------------------------------------------------
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser("pepper", help="the graph with the Pepper bridge (a real robot or the stand-in)",
+                              description="The node graph with pepper_bridge in place of homeo_sim.")
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--qi-url", default="tcp://127.0.0.1:9559", help="the robot's NAOqi URL "
+                     "(default tcp://127.0.0.1:9559; tcps://ROBOT:9503 with --user/--password)")
+    src.add_argument("--standin", action="store_true", help="start a stand-in Pepper on loopback (its own process)")
+    p.add_argument("--user", help="NAOqi 2.9 user (tcps)")
+    p.add_argument("--password", help="NAOqi 2.9 password (tcps)")
+    p.add_argument("--script", metavar="FILE", help="the stand-in's scripted user (a path or a file of "
+                   "pepper_bridge/scripts/); its robot.drives are the initial drives")
+    p.add_argument("--config", metavar="FILE", help="places/phrases file (default pepper_bridge/scripts/pepper.json)")
+    p.add_argument("--scenario", metavar="FILE", help="scenario JSON (default: the thesis scenario)")
+    p.add_argument("--q-table", metavar="FILE", help="the decision node loads this Q-table at start "
+                   "(with --field: one table for both robots)")
+    p.add_argument("--dod", type=_float_in(0.0, 1.0), default=None, help="Degree of Dedication (Eq 3.27)")
+    p.add_argument("--intention", choices=("cues", "bayes"), default="cues",
+                   help="cues (default): the config's keyword/gesture cues name the intention (the intention node in "
+                        "oracle mode; as homeo-pepper-field); bayes: the Bayesian recogniser on the raw cues")
+    p.add_argument("--interactions", type=_int_at_least(0), default=0,
+                   help="interactions (0 = until the script ends, or Ctrl-C on a robot)")
+    p.add_argument("--seed", type=_int_at_least(0), default=0, help="seed of the decision node and the stand-in")
+    p.add_argument("--time-scale", type=_float_in(0.0, 1000.0), default=0.0,
+                   help="stand-in: simulated seconds per wall second (default 0: each action lasts 10 s, reproducible)")
+    p.add_argument("--collect-window", type=_float_in(0.0, 600.0), default=None,
+                   help="longest wait for the user's reaction, s (default 3 with the stand-in, 8 on a robot)")
+    p.add_argument("--collect-quiet", type=_float_in(0.0, 600.0), default=None,
+                   help="a gap without events that ends the wait, s (default 0.15 with the stand-in; on a robot the "
+                        "whole window)")
+    p.add_argument("--action-timeout", type=_float_in(0.01, 3600.0), default=5.0,
+                   help="seconds to wait for the decision before an interaction counts as none (default 5)")
+    p.add_argument("--fresh-schedule", action="store_true", help="with a Q-table: start the learning schedule over "
+                   "(default: continue in its last phase)")
+    p.add_argument("--field", action="store_true", help="the field test: a dedicated (DoD 0.25) and a selfish (DoD 0) "
+                   "robot meet the same scripted user on stand-ins; both tables side by side")
+    p.add_argument("--q-dedicated", metavar="FILE", help="--field: the dedicated robot's Q-table (default: trained, "
+                   "homeo-sim run --iterations 5000 --seed 0)")
+    p.add_argument("--q-selfish", metavar="FILE", help="--field: the selfish robot's Q-table (default: trained at DoD 0)")
+    p.add_argument("--log-dir", metavar="DIR", help="keep each node's log here (default: a temporary directory)")
+    p.add_argument("--json", action="store_true", help="print the interaction log as JSON")
+    p.add_argument("--quiet", action="store_true", help="no per-interaction progress on stderr")
+
+
+def _check_args(a) -> None:
+    if a.field:
+        a.standin = True
+        a.script = a.script or "field_user.json"
+        if a.dod is not None:
+            raise UserError("--field runs DoD 0.25 and DoD 0; leave out --dod")
+    if a.script and not a.standin:
+        raise UserError("--script needs --standin (a real robot has a real user)")
+    if (a.q_dedicated or a.q_selfish) and not a.field:
+        raise UserError("--q-dedicated / --q-selfish go with --field")
+    for f in (a.q_table, a.q_dedicated, a.q_selfish):
+        if f and not os.path.isfile(f):
+            raise UserError(f"Q-table file not found: {f}")
+    if a.script:
+        _script_path(a.script)
+    if a.config and not os.path.isfile(a.config):
+        raise UserError(f"config file not found: {a.config}")
+    if a.collect_window is None:
+        a.collect_window = 3.0 if a.standin else 8.0
+    if a.collect_quiet is None:
+        a.collect_quiet = 0.15 if a.standin else a.collect_window
+    from homeo_decision.scenario import load_scenario
+
+    load_scenario(a.scenario)  # a bad scenario is a one-line error here, not in four nodes
+
+
+def _row_line(r: dict) -> str:
+    fb = {1: "+", -1: "-", 0: ""}.get(r["feedback"], "?")
+    return (f"{r['interaction']:>3}  {r['m_dom'] or '-':<10} {r['intention'] or '-':<9} {r['action'] or '-':<8} "
+            f"{fb:>3}  {r['proposal'] or '-':<8}")
+
+
+HEADER = f"{'#':>3}  {'m_dom':<10} {'intention':<9} {'action':<8} {'fb':>3}  {'proposal':<8}"
+
+
+def cmd_pepper(a) -> int:
+    from homeo_decision.qtable_io import QTableError
+
+    from .config import ConfigError
+    from .user import ScriptError
+
+    try:
+        _check_args(a)
+    except (ConfigError, ScriptError) as exc:
+        raise UserError(str(exc)) from None
+    tmp = None
+    if a.log_dir:
+        base = Path(a.log_dir)
+        base.mkdir(parents=True, exist_ok=True)
+    else:
+        tmp = tempfile.TemporaryDirectory(prefix="homeo-pepper-")
+        base = Path(tmp.name)
+    try:
+        if a.field:
+            return _cmd_field(a, base)
+        return _cmd_one(a, base)
+    except (ConfigError, ScriptError, QTableError) as exc:
+        raise UserError(str(exc)) from None
+    finally:
+        if tmp is not None:
+            tmp.cleanup()
+
+
+def _cmd_one(a, base: Path) -> int:
+    show = not a.json and not a.quiet
+    if show:
+        print(HEADER, file=sys.stderr)
+    last: dict = {}
+    try:
+        run = run_robot(a, "robot", a.dod, a.q_table, base, on_row=(lambda r: print(_row_line(r), file=sys.stderr))
+                        if show else None, last=last)
+        code = 0
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted; all nodes stopped", file=sys.stderr)
+        run = {"label": "robot", "dod": a.dod, "status": dict(last), "user_log": []}
+        code = 0 if a.interactions == 0 and not a.script else 130  # an unbounded run ends with Ctrl-C
+        if not (last.get("extra") or {}).get("log"):
+            return 130
+    from homeo_decision.scenario import load_scenario
+
+    res = field_result(run, a.seed, float(load_scenario(a.scenario).learning["dod"]))
+    st = run["status"]
+    if a.json:
+        out = {"seed": a.seed, "dod": res.dod, "url": (st.get("extra") or {}).get("robot", {}).get("url"),
+               "interactions": len(res.log), "missed": st.get("missed", 0), "log": res.log}
+        if res.user_log:
+            out["summary"] = res.summary()
+            out["user_log"] = res.user_log
+        print(json.dumps(out, indent=1))
+    else:
+        if res.user_log:
+            print("\n".join(_format(res)))
+        else:
+            print(HEADER)
+            for r in res.log:
+                print(_row_line(r))
+        print(f"{len(res.log)} interactions, {st.get('missed', 0)} missed")
+    return code
+
+
+def _format(res) -> list[str]:
+    from .field import format_table
+
+    return format_table(res)
+
+
+def _field_tables(a, tmp: Path) -> dict:
+    from .field import train_q
+
+    tables = {}
+    for label, dod in FIELD_DODS:
+        given = a.q_table or (a.q_dedicated if label == "dedicated" else a.q_selfish)
+        if not given:
+            print(f"{PROG}: training the {label} robot's Q-table (5000 simulated iterations, seed 0, DoD {dod})",
+                  file=sys.stderr)
+            given = str(train_q(tmp / f"q_{label}.json", dod))
+        tables[label] = given
+    return tables
+
+
+def _cmd_field(a, base: Path) -> int:
+    from .field import side_by_side
+
+    tables = _field_tables(a, base)
+    results = []
+    for label, dod in FIELD_DODS:
+        d = base / label
+        d.mkdir(exist_ok=True)
+        if not a.json and not a.quiet:
+            print(f"{PROG}: {label} robot (DoD {dod}) through the graph", file=sys.stderr)
+        run = run_robot(a, label, dod, tables[label], d)
+        results.append(field_result(run, a.seed))
+    if a.json:
+        print(json.dumps({"seed": a.seed, "robots": [{"summary": r.summary(), "log": r.log} for r in results]},
+                         indent=1))
+    else:
+        print(side_by_side(*results))
+    return 0

@@ -1,0 +1,182 @@
+"""The node graph with ``pepper_bridge`` in place of ``homeo_sim``, against the stand-in Pepper.
+
+Real node processes over DDS and a real libqi session on loopback; each graph takes its own
+ROS_DOMAIN_ID and every wait is bounded.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+
+import pytest
+
+qi = pytest.importorskip("qi")
+
+from rosgraph import Probe, fresh_domain  # noqa: E402
+
+from homeo_sim.processes import Graph, graph_env  # noqa: E402
+from pepper_bridge.config import load_config  # noqa: E402
+from pepper_bridge.launch_pepper import pepper_specs  # noqa: E402
+from pepper_bridge.mapping import BATTERY_KEY, EMOTION_EVENT, TOUCH_EVENTS, WORD_EVENT  # noqa: E402
+from pepper_bridge.standin import StandinRobot  # noqa: E402
+
+pytestmark = [pytest.mark.ros, pytest.mark.qi]
+qi.logging.setLevel(qi.logging.ERROR)
+START_S = 60.0
+ROBOT = "pepper_bridge: robot"
+NRES = {0: 0.0, 1: 50.0, 2: 80.0, 3: 100.0}  # Table 4.6
+
+LAUNCH = ("import sys; from homeo_sim.cli import _Parser; from pepper_bridge.launch_pepper import add_parser, cmd_pepper;"
+          "ap = _Parser(prog='homeo-launch'); sub = ap.add_subparsers(dest='cmd', required=True); add_parser(sub);"
+          "sys.exit(cmd_pepper(ap.parse_args(sys.argv[1:])))")
+
+
+def test_launcher_runs_the_bridge_graph_on_the_standin_and_prints_the_interaction_log(tmp_path):
+    d = fresh_domain()
+    r = subprocess.run([sys.executable, "-c", LAUNCH, "pepper", "--standin", "--script", "field_user.json",
+                        "--interactions", "4", "--json", "--log-dir", str(tmp_path)],
+                       env=graph_env(d), capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr[-2000:]
+    out = json.loads(r.stdout)
+    assert [row["interaction"] for row in out["log"]] == [1, 2, 3, 4] and out["missed"] == 0
+    for row in out["log"]:
+        assert set(row) >= {"m_dom", "intention", "action", "feedback", "proposal"}
+        assert row["feedback"] in (-1, 0, 1)
+    assert out["log"][0]["intention"] == "light" and out["log"][0]["battery_percent"] == pytest.approx(30.0)
+    assert len(out["user_log"]) == 4  # the stand-in's user judged every action
+
+
+@pytest.fixture(scope="module")
+def live():
+    """An unbounded bridge graph on a stand-in without a scripted user; the test drives the user."""
+    d = fresh_domain()
+    robot = StandinRobot(load_config(), None, battery=40.0, time_scale=0.0)
+    url = robot.start()
+    specs = pepper_specs(url=url, scenario="", overrides={}, seed=0, dod=None, q_table=None, interactions=0,
+                         collect_window=0.6, collect_quiet=0.6, action_timeout=5.0, end_with_script=False)
+    g = Graph(specs, graph_env(d))
+    g.start()
+    probe = Probe(d)
+    state = {"robot": robot, "probe": probe, "graph": g, "worlds": probe.collect("/homeo/world"),
+             "outcomes": probe.collect("/homeo/outcome"), "robot_status": []}
+
+    def on_diag(arr):
+        for s in arr.status:
+            if s.name == ROBOT:
+                state["robot_status"].append({"level": s.level[0] if isinstance(s.level, bytes) else s.level,
+                                              "message": s.message, "values": {kv.key: kv.value for kv in s.values}})
+
+    from diagnostic_msgs.msg import DiagnosticArray
+
+    probe.node.create_subscription(DiagnosticArray, "/diagnostics", on_diag, 50)
+    try:
+        assert probe.spin_until(lambda: len(state["outcomes"]) >= 2, START_S), \
+            f"no interactions; bridge log:\n{g.log_tail('pepper_bridge', 30)}"
+        yield state
+    finally:
+        probe.close()
+        g.stop()
+        g.close()
+        robot.close()
+
+
+def _alive(state) -> None:
+    dead = state["graph"].dead()
+    assert dead is None, f"{dead} died:\n{state['graph'].log_tail(dead[0], 30)}"
+
+
+def test_world_carries_the_body_readings(live):
+    w = live["worlds"][-1]
+    body = w["body"]
+    assert set(body) >= {"battery_percent", "temperature_status", "NEng", "NRes"}
+    assert body["NEng"] == pytest.approx(100.0 - body["battery_percent"])
+    assert body["NRes"] == NRES[int(body["temperature_status"])]
+    assert 30.0 < body["battery_percent"] <= 40.0  # started at 40 %, drains while acting
+    st = live["robot"].state()
+    assert live["worlds"][-1]["robot"]["location"] in ("H", "C", "R") and st["battery_percent"] <= 40.0
+
+
+def _next_world(state, timeout=20.0) -> dict:
+    n = len(state["worlds"])
+    assert state["probe"].spin_until(lambda: len(state["worlds"]) > n, timeout), "no new tick"
+    return state["worlds"][-1]
+
+
+def _outcome_of(state, tick: int, timeout=20.0) -> dict:
+    found = lambda: [o for o in state["outcomes"] if o["tick"] == tick]  # noqa: E731
+    assert state["probe"].spin_until(lambda: bool(found()), timeout), f"no outcome for tick {tick}"
+    return found()[0]
+
+
+def test_touch_and_angry_voice_arrive_as_feedback_on_the_outcome(live):
+    robot = live["robot"]
+    w = _next_world(live)  # tick k is waiting for its action: the reaction belongs to outcome(k)
+    robot.raise_event(TOUCH_EVENTS[0], 1.0)
+    robot.raise_event(TOUCH_EVENTS[0], 0.0)
+    assert _outcome_of(live, w["tick"])["feedback"] == 1
+    w = _next_world(live)
+    robot.raise_event(EMOTION_EVENT, [[2, 0.9], [0.1, 0.9, 0.0, 0.0, 0.0], 0.5])
+    robot.raise_event(WORD_EVENT, ["play music", 0.9])
+    out = _outcome_of(live, w["tick"])
+    assert out["feedback"] == -1 and out["proposal"] == "Play" and out["clarified_intention"] == "music"
+    w = _next_world(live)
+    assert _outcome_of(live, w["tick"])["feedback"] == 0  # nothing said: no feedback
+    _alive(live)
+
+
+def test_wrongly_typed_value_is_reported_on_diagnostics_and_ticks_go_on(live):
+    robot, probe = live["robot"], live["probe"]
+    robot.inject(BATTERY_KEY, "abc")
+    try:
+        assert probe.spin_until(lambda: any(int(s["values"].get("rejected_total", 0)) >= 1
+                                            for s in live["robot_status"]), 20.0), live["robot_status"][-1:]
+        bad = next(s for s in live["robot_status"] if int(s["values"].get("rejected_total", 0)) >= 1)
+        assert bad["level"] == 1 and "rejected" in bad["message"]
+        assert any("abc" in s["values"].get("recent", "") for s in live["robot_status"])
+        n = len(live["outcomes"])
+        assert probe.spin_until(lambda: len(live["outcomes"]) >= n + 2, 20.0), "ticks stopped"
+        assert isinstance(live["worlds"][-1]["body"]["battery_percent"], float)  # the last good value stands
+    finally:
+        robot.clear_injections()
+    _alive(live)
+
+
+def test_robot_dropping_and_coming_back_is_survived(live):
+    robot, probe = live["robot"], live["probe"]
+    seen = len(live["robot_status"])
+    robot.drop_for(1.5)
+    t_drop = time.monotonic()
+    down = lambda: [s for s in live["robot_status"][seen:] if s["values"]["connected"] == "false"]  # noqa: E731
+    assert probe.spin_until(lambda: bool(down()), 10.0), "the drop was not reported"
+    assert down()[0]["level"] == 2
+    back = lambda: [s for s in live["robot_status"][seen:] if s["values"]["connected"] == "true"  # noqa: E731
+                    and int(s["values"]["drops"]) >= 1]
+    assert probe.spin_until(lambda: bool(back()), 20.0), "never reconnected"
+    n = len(live["outcomes"])
+    assert probe.spin_until(lambda: len(live["outcomes"]) >= n + 2, 20.0), "ticks did not resume"
+    assert time.monotonic() - t_drop >= 1.5
+    ticks = [o["tick"] for o in live["outcomes"]]
+    assert ticks == list(range(ticks[0], ticks[0] + len(ticks)))  # no tick lost or repeated
+    _alive(live)
+
+
+def test_field_test_through_the_graph_matches_the_in_process_driver(tmp_path):
+    """Both robots of the field test, run through the node graph, give homeo-pepper-field's log row for row."""
+    from pepper_bridge.field import run_field, train_q
+
+    q = {"dedicated": str(train_q(tmp_path / "qd.json", 0.25)), "selfish": str(train_q(tmp_path / "qs.json", 0.0))}
+    r = subprocess.run([sys.executable, "-c", LAUNCH, "pepper", "--field", "--script", "field_user.json", "--seed", "0",
+                        "--q-dedicated", q["dedicated"], "--q-selfish", q["selfish"], "--json"],
+                       env=graph_env(fresh_domain()), capture_output=True, text=True, timeout=150)
+    assert r.returncode == 0, r.stderr[-2000:]
+    robots = json.loads(r.stdout)["robots"]
+    cols = ("m_dom", "intention", "action", "feedback", "proposal")
+    for got, (label, dod) in zip(robots, (("dedicated", 0.25), ("selfish", 0.0))):
+        ref = run_field("field_user.json", dod, 0, q[label], label=label)
+        assert [[x[c] for c in cols] for x in got["log"]] == [[x[c] for c in cols] for x in ref.log], label
+        assert got["summary"]["satisfied"] == ref.summary()["satisfied"]
+    ded, sel = (x["summary"] for x in robots)
+    assert ded["satisfied"] > sel["satisfied"]
