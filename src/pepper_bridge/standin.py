@@ -32,6 +32,7 @@ from __future__ import annotations
 import argparse
 import collections
 import math
+import os
 import signal
 import sys
 import threading
@@ -540,7 +541,11 @@ def main(argv=None) -> int:
         pass
     finally:
         robot.close()
-    return 0
+    # libqi's threads and static objects can abort (SIGABRT) during interpreter teardown, which
+    # would turn a clean stop into exit code -6: the session is closed, so leave at once
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(0)
 
 
 if __name__ == "__main__":
