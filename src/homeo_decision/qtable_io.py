@@ -8,13 +8,11 @@ are dropped and reported (Section 3.2.2: adding or removing an object leaves the
 
 from __future__ import annotations
 
-import json
 import math
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from . import jsonfile
 from .objectq import ObjectQ
 from .scenario import RELATIONS
 
@@ -61,29 +59,11 @@ def to_dict(q: ObjectQ, meta: dict | None = None) -> dict:
 
 def save(q: ObjectQ, path: str | Path, meta: dict | None = None) -> None:
     """Write atomically, so a crash never leaves half a table."""
-    p = Path(path)
-    data = json.dumps(to_dict(q, meta), separators=(",", ":"))
-    try:
-        p.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=p.parent, prefix=p.name, suffix=".tmp")
-        with os.fdopen(fd, "w") as fh:
-            fh.write(data)
-        os.replace(tmp, p)
-    except OSError as exc:
-        raise QTableError(f"cannot write Q-table {p}: {exc.strerror or exc}") from None
+    jsonfile.write_atomic(path, to_dict(q, meta), QTableError, "Q-table")
 
 
 def load(q: ObjectQ, path: str | Path) -> LoadReport:
-    p = Path(path)
-    try:
-        raw = json.loads(p.read_text())
-    except FileNotFoundError:
-        raise QTableError(f"Q-table file not found: {p}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise QTableError(f"cannot read Q-table {p}: {exc}") from None
-    except json.JSONDecodeError as exc:
-        raise QTableError(f"{p}: corrupt Q-table (not JSON: {exc.msg} at line {exc.lineno})") from None
-    return from_dict(q, raw, str(p))
+    return from_dict(q, jsonfile.read(path, QTableError, "Q-table"), str(path))
 
 
 def from_dict(q: ObjectQ, raw, where: str = "<memory>") -> LoadReport:

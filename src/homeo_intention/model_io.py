@@ -7,14 +7,12 @@ seen, so learning continues where it stopped.
 
 from __future__ import annotations
 
-import json
 import math
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from homeo_decision import jsonfile
 from homeo_decision.scenario import OBS_CHANNELS
 
 from .em import Params
@@ -52,29 +50,11 @@ def to_dict(model, meta: dict | None = None) -> dict:
 
 def save(model, path: str | Path, meta: dict | None = None) -> None:
     """Write atomically, so a crash never leaves half a model."""
-    p = Path(path)
-    data = json.dumps(to_dict(model, meta), separators=(",", ":"))
-    try:
-        p.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=p.parent, prefix=p.name, suffix=".tmp")
-        with os.fdopen(fd, "w") as fh:
-            fh.write(data)
-        os.replace(tmp, p)
-    except OSError as exc:
-        raise IntentionModelError(f"cannot write intention model {p}: {exc.strerror or exc}") from None
+    jsonfile.write_atomic(path, to_dict(model, meta), IntentionModelError, "intention model")
 
 
 def load(model, path: str | Path) -> None:
-    p = Path(path)
-    try:
-        raw = json.loads(p.read_text())
-    except FileNotFoundError:
-        raise IntentionModelError(f"intention model file not found: {p}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise IntentionModelError(f"cannot read intention model {p}: {exc}") from None
-    except json.JSONDecodeError as exc:
-        raise IntentionModelError(f"{p}: corrupt intention model (not JSON: {exc.msg} at line {exc.lineno})") from None
-    from_dict(model, raw, str(p))
+    from_dict(model, jsonfile.read(path, IntentionModelError, "intention model"), str(path))
 
 
 def _dist(values, what: str, where: str) -> np.ndarray:

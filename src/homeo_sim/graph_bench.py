@@ -23,11 +23,10 @@ CRITICAL_HOPS = 4
 
 
 def floor_s_per_tick(iterations: int, hops: int = HOPS, bound_s: float = 120.0) -> float:
+    # each process declares node name homeo_floor: renamed so that its parameters file applies
     specs = [NodeSpec(f"homeo_floor_{i}", "homeo_msgs_py.floor_chain",
-                      {"index": i, "hops": hops, "iterations": iterations}, args=[]) for i in range(hops)]
-    # every process declares node name homeo_floor; give each its own through the params file key
-    for s in specs:
-        s.args = ["--ros-args", "-r", f"__node:={s.name}"]
+                      {"index": i, "hops": hops, "iterations": iterations},
+                      args=["--ros-args", "-r", f"__node:=homeo_floor_{i}"]) for i in range(hops)]
     graph = Graph(specs, graph_env())
     try:
         graph.start()

@@ -68,13 +68,11 @@ def sim_specs(o: SimOptions) -> list[NodeSpec]:
             decision[k] = float(v)
     if o.pseudo_update is not None:
         decision["pseudo_update"] = bool(o.pseudo_update)
-    q_path = o.save_q or o.load_q
+    q_path = o.load_q or o.save_q  # a different --save-q is set just before saving
     if q_path:
         decision["q_table_path"] = os.path.abspath(q_path)
     if o.load_q:
         decision["load_on_start"] = True
-        if o.save_q and o.save_q != o.load_q:
-            decision["q_table_path"] = os.path.abspath(o.load_q)  # switched to save_q before saving
     bayes = o.intention == "bayes"
     sim = dict(common, seed=o.seed, iterations=o.iterations, rate=float(o.rate),
                action_timeout=float(o.action_timeout), trace_path=os.path.abspath(o.trace) if o.trace else "",
