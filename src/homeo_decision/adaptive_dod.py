@@ -120,6 +120,7 @@ class AdaptiveDoDRobot:
         if self.controller.dod != core.dod:
             core.set_params(dod=self.controller.dod)
         self.q = core.q
+        self.sc = core.sc
 
     @property
     def dod(self) -> float:
@@ -135,6 +136,9 @@ class AdaptiveDoDRobot:
 
     def perceive(self, drives: Sequence[float], code: int) -> Percept:
         return self.core.perceive(drives, code)
+
+    def percept(self, code: int, drives: Sequence[float], inten: list, m_dom: int) -> Percept:
+        return self.core.percept(code, drives, inten, m_dom)
 
     def select(self, p: Percept, t: int) -> int:
         return self.core.select(p, t)

@@ -1,8 +1,9 @@
-"""The decision maker: perception -> dominant motivation -> softmax choice -> learning.
+"""The decision maker of Algorithm 1: softmax choice (Eq 3.17) and Object-Q learning (Eq 3.14, 3.23).
 
-This is Algorithm 1 of the thesis as a ROS-free object. The runner (or a node) gives it
-the drives and the perceived world each tick; it answers with an action and learns
-from the outcome.
+A policy turns a perception (world code, drives, intensities, m_dom: ``homeo_decision.robot``'s
+``Perception`` computes them once per tick) into a :class:`Percept` with its own states, selects
+an action, and learns from the outcome. ``DecisionCore`` is the thesis's Object-Q robot; the
+baselines (``homeo_decision.baselines``) offer the same interface.
 """
 
 from __future__ import annotations
@@ -10,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Sequence
 
-from .motivation import dod_weights, dominant, intensities
+from .motivation import dod_weights, motivational_state
 from .objectq import ObjectQ, phase_at, schedule_from
 from .reward import drive_reward, pseudo_drives, reward
 from .rng import UniformStream
@@ -34,7 +35,30 @@ class Learned:
     pseudo_reward: float | None  # r+_drives + f of Eq 3.23 when a pseudo update ran
 
 
-class DecisionCore:
+class Perceiving:
+    """What every policy shares: Eq 3.2-3.3 for a standalone ``perceive`` and the percept of a
+    perception computed elsewhere; a policy adds its own states (``_states``)."""
+
+    def _init_perception(self, sc: Scenario) -> None:
+        self.thresholds = [d.threshold for d in sc.drives]
+        self.tie_break = sc.open["tie_break"]
+        self.stim = sc.c.stim
+        self.valid = sc.c.valid
+
+    def _states(self, m_dom: int, code: int) -> tuple:
+        return ()
+
+    def percept(self, code: int, drives: Sequence[float], inten: list, m_dom: int) -> Percept:
+        """The Percept of a perception made by ``robot.Perception`` (or the drives node)."""
+        return Percept(code, drives, inten, m_dom, self._states(m_dom, code))
+
+    def perceive(self, drives: Sequence[float], code: int) -> Percept:
+        """Algorithm 1 lines 2-10 on their own: stimuli, intensities (Eq 3.2), m_dom (Eq 3.3), states."""
+        inten, m = motivational_state(drives, self.thresholds, self.stim[code], self.tie_break)
+        return Percept(code, tuple(drives), inten, m, self._states(m, code))
+
+
+class DecisionCore(Perceiving):
     """Object Q-learning with motivation factor, DoD weights and pseudo updates."""
 
     def __init__(self, sc: Scenario, seed: int = 0, *, dod: float | None = None, xi: float | None = None,
@@ -42,12 +66,9 @@ class DecisionCore:
                  feedback: bool = True):
         self.sc = sc
         L = sc.learning
-        self.thresholds = [d.threshold for d in sc.drives]
-        self.tie_break = sc.open["tie_break"]
+        self._init_perception(sc)
         self.schedule = schedule_from(L)
         self.q = ObjectQ(sc)
-        self.stim = sc.c.stim
-        self.valid = sc.c.valid
         self.serving = sc.serving
         self.praise = sc.praise_change
         self.set_params(dod=L["dod"] if dod is None else dod, xi=L["xi"] if xi is None else xi,
@@ -95,15 +116,13 @@ class DecisionCore:
         self.reseed(self.seed if seed is None else seed)
 
     # -- Algorithm 1 -----------------------------------------------------------
-    def perceive(self, drives: Sequence[float], code: int) -> Percept:
-        """Lines 2-10: stimuli, intensities, m_dom and the reduced states."""
-        inten = intensities(drives, self.thresholds, self.stim[code])
-        m = dominant(inten, self.tie_break)
-        return Percept(code, tuple(drives), inten, m, self.q.states(m, code))
+    def _states(self, m_dom: int, code: int) -> tuple:
+        """Eq 3.11: the reduced state of every object."""
+        return self.q.states(m_dom, code)
 
-    def percept_from(self, code: int, drives: Sequence[float], inten: Sequence[float], m_dom: int) -> Percept:
-        """The Percept of ``perceive`` from intensities and m_dom computed elsewhere (the drives node)."""
-        return Percept(code, tuple(drives), list(inten), m_dom, self.q.states(m_dom, code))
+    def percept(self, code: int, drives: Sequence[float], inten: list, m_dom: int) -> Percept:
+        # Perceiving.percept with the reduced states looked up directly: once per tick
+        return Percept(code, drives, inten, m_dom, self.q._states[m_dom][code])
 
     def select(self, p: Percept, t: int) -> int:
         """Lines 11-17: softmax (Eq 3.17) over the valid actions, at the temperature of tick t."""
@@ -122,7 +141,7 @@ class DecisionCore:
             d_dag = pseudo_drives(p.drives, self.serving, self.praise)
             r_dag = drive_reward(p.drives, d_dag, self.weights, p.m_dom, self.xi)
             # s+ differs from s only in m_dom, from the pseudo drives and unchanged stimuli
-            m_dag = dominant(intensities(d_dag, self.thresholds, self.stim[p.code]), self.tie_break)
+            m_dag = motivational_state(d_dag, self.thresholds, self.stim[p.code], self.tie_break)[1]
             s_dag = self.q.states(m_dag, p.code)
             self.q.pseudo_update(proposal, p.states, r_dag, self.f, s_dag, alpha, self.gamma, p.code)
             r_dag += self.f

@@ -34,8 +34,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Sequence
 
-from .agent import DecisionCore, Learned, Percept
-from .motivation import dod_weights, dominant, intensities
+from .agent import DecisionCore, Learned, Perceiving, Percept
+from .motivation import dod_weights
 from .objectq import phase_at, schedule_from, softmax_pick, softmax_probs
 from .reward import reward
 from .rng import UniformStream
@@ -44,16 +44,13 @@ from .scenario import NULL_OBJECT, Scenario
 POLICIES = ("objectq", "random", "rule", "flatq", "nofeedback")
 
 
-class _Perceiving:
-    """Shared perception (Eq 3.2-3.3) and the trace reward (Eq 3.18) for baselines."""
+class _Perceiving(Perceiving):
+    """Shared settings and the trace reward (Eq 3.18) for baselines."""
 
     def __init__(self, sc: Scenario, seed: int, dod: float | None, xi: float | None):
         L = sc.learning
         self.sc = sc
-        self.thresholds = [d.threshold for d in sc.drives]
-        self.tie_break = sc.open["tie_break"]
-        self.stim = sc.c.stim
-        self.valid = sc.c.valid
+        self._init_perception(sc)
         self.serving = sc.serving
         self.dod = float(L["dod"] if dod is None else dod)
         self.xi = float(L["xi"] if xi is None else xi)
@@ -65,14 +62,6 @@ class _Perceiving:
     def reseed(self, seed: int) -> None:
         self.seed = int(seed)
         self.rng = UniformStream(self.seed, "policy")
-
-    def _states(self, m_dom: int, code: int) -> tuple:
-        return ()
-
-    def perceive(self, drives: Sequence[float], code: int) -> Percept:
-        inten = intensities(drives, self.thresholds, self.stim[code])
-        m = dominant(inten, self.tie_break)
-        return Percept(code, tuple(drives), inten, m, self._states(m, code))
 
     def learn(self, p: Percept, action: int, after: Sequence[float], feedback: int, proposal: int | None,
               p_next: Percept, t: int) -> Learned:

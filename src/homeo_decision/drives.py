@@ -81,4 +81,4 @@ class DriveModel(DriveDynamics):
         """Table 4.2 growth; whether the serving drive grows on a tick is the open choice ``nach_growth``."""
         g = self.growth
         grow_serving = g == "always" or (g == "expressed" and expressed) or (g == "unsatisfied" and expressed and not satisfied)
-        super().apply_time(skip=-1 if grow_serving else self.serving)
+        DriveDynamics.apply_time(self, -1 if grow_serving else self.serving)

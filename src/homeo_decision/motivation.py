@@ -28,6 +28,15 @@ def dominant(intens: Sequence[float], tie_break: str = "first") -> int:
     return best
 
 
+def motivational_state(drives: Sequence[float], thresholds: Sequence[float], stimulus: Sequence[float],
+                       tie_break: str = "first") -> tuple[list[float], int]:
+    """Eq 3.2 then Eq 3.3: the intensities and the dominant motivation (the robot's internal state,
+    Eq 3.6). The one place both are combined: perception, the pseudo state of Eq 3.23 and the
+    baselines all call it."""
+    inten = intensities(drives, thresholds, stimulus)
+    return inten, dominant(inten, tie_break)
+
+
 def dod_weights(dod: float, n_drives: int, serving: int) -> list[float]:
     """Eq 3.27-3.28: w_serving = DoD * |D|; the others share |D| - w_serving equally."""
     if not 0.0 <= dod <= 1.0:

@@ -1,12 +1,11 @@
-"""Intention recognisers with one interface: ``recognise(obs) -> Recognition`` and ``learn(obs, label)``.
+"""The thesis's intention recogniser (Section 2.3): ``recognise(cues) -> Recognition``, ``learn(cues, label)``.
 
-``IntentionModel`` is the thesis's recogniser (Section 2.3): a Bayesian network over the user's
-gesture, movement and spoken keyword, the arg-max of the posterior (Eq 2.10), and EM when the user
-reveals what they meant. ``OracleModel`` reads the true intention from the observation, as the
-thesis's own simulation did (Sec 4.2.1). Neither imports rclpy: the ROS node wraps them.
+A Bayesian network over the user's gesture, movement and spoken keyword, the arg-max of the
+posterior (Eq 2.10), and EM when the user reveals what they meant. No rclpy: the robot's
+recognition part (``recognition.py``) and the ROS node wrap it.
 
-Observations are dicts with the symbols under ``gesture``, ``movement`` and ``keyword`` (a missing
-or None channel is unobserved); the oracle reads the intention's name under ``intention``.
+Cues are dicts with the symbols under ``gesture``, ``movement`` and ``keyword`` (a missing or
+None channel is unobserved).
 """
 
 from __future__ import annotations
@@ -44,8 +43,6 @@ class IntentionModel:
     each prior CPD column is worth (Dirichlet pseudo counts of the MAP-EM); ``max_iter`` and
     ``atol`` -- when one EM run stops.
     """
-
-    needs_truth = False  # recognises from gesture, movement and keyword only
 
     def __init__(self, sc: Scenario, threshold: float | None = None, prior_strength: float | None = None,
                  max_iter: int = 100, atol: float = 1e-6):
@@ -157,41 +154,3 @@ class IntentionModel:
         from .model_io import load
 
         load(self, path)
-
-
-class OracleModel:
-    """The thesis's simulation: the intention is observed directly (``obs["intention"]``, a name)."""
-
-    needs_truth = True  # the observation must carry the true intention
-
-    def __init__(self, sc: Scenario):
-        self.sc = sc
-        self.names = sc.intention_names
-        self.K = len(self.names)
-        self._index = {n: i for i, n in enumerate(self.names)}
-        self._rec = [Recognition(i, [1.0 if j == i else 0.0 for j in range(self.K)], 1.0) for i in range(self.K)]
-
-    def recognise(self, obs: dict) -> Recognition:
-        name = obs.get("intention") if isinstance(obs, dict) else None
-        i = self._index.get(name, -1)
-        if i < 0:
-            if name is None:
-                raise UnknownObservation("oracle recognition needs the true intention under obs['intention']")
-            raise UnknownObservation(f"unknown intention {name!r}; known: {', '.join(self.names)}")
-        r = self._rec[i]
-        return Recognition(r.intention, list(r.posterior), 1.0)
-
-    def learn(self, obs: dict, label: int | None) -> int:
-        return 0
-
-    def reset(self) -> None:
-        pass
-
-
-def make_model(mode: str, sc: Scenario, **settings):
-    """``oracle`` or ``bayes``: the recogniser of a run or a node."""
-    if mode == "oracle":
-        return OracleModel(sc)
-    if mode == "bayes":
-        return IntentionModel(sc, **settings)
-    raise ValueError(f"unknown intention mode {mode!r}; known: oracle, bayes")

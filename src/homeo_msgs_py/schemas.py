@@ -262,22 +262,17 @@ SCHEMAS: dict[str, dict[str, tuple[Check, bool]]] = {
 
 
 class Vocabulary:
-    """The scenario's names that message fields may take."""
+    """The names that message fields may take: ``kind -> names`` (actions, intentions, drives,
+    motivations, locations, presences, relations, modes) and ``object_vars``: object -> variable ->
+    values. ``homeo_decision.codec.vocabulary(scenario)`` builds the one of a scenario; without
+    names only the envelope and the scenario-free schemas (run_status) can be checked."""
 
-    def __init__(self, sc=None, **names):
-        from homeo_decision.scenario import NONE_INTENTION, RELATIONS
+    def __init__(self, object_vars: dict | None = None, **names):
+        from .graph import INTENTION_MODES
 
-        self._names: dict[str, list[str]] = {"presences": ["present", "absent"], "relations": list(RELATIONS),
-                                            "modes": ["oracle", "bayes"]}
-        self.object_vars: dict[str, dict[str, list[str]]] = {}
-        if sc is not None:
-            self._names.update(actions=sc.action_names, intentions=sc.intention_names, drives=sc.drive_names,
-                               motivations=sc.motivation_names, locations=list(sc.locations))
-            self.object_vars = {o: {var: list(vals) for var, vals in spec["variables"].items()}
-                                for o, spec in sc.objects.items()}
-        else:
-            self._names.update(intentions=[NONE_INTENTION])
-        self._names.update(names)
+        self._names: dict[str, list[str]] = {"modes": list(INTENTION_MODES)}
+        self._names.update({k: list(v) for k, v in names.items()})
+        self.object_vars: dict[str, dict[str, list[str]]] = object_vars or {}
 
     def names(self, kind: str) -> list[str]:
         return self._names.get(kind, [])

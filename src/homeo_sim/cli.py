@@ -27,7 +27,9 @@ from homeo_decision.scenario import ScenarioError
 
 from homeo_decision.baselines import POLICIES
 
-from .runner import INTENTION_MODES, RunConfig, build_scenario, run_episode, run_seeds
+from homeo_msgs_py.graph import BAYES, INTENTION_MODES, ORACLE
+
+from .runner import RunConfig, build_scenario, run_episode, run_seeds
 from .stats import aggregate, describe, json_safe
 from .thesis_values import TABLE_4_5
 
@@ -111,7 +113,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="decision maker: the thesis's Object-Q (default) or a baseline (docs/EXPERIMENTS.md)")
     run.add_argument("--adaptive-dod", action="store_true",
                      help="adjust DoD online from the user's and the robot's satisfaction (docs/EXPERIMENTS.md)")
-    run.add_argument("--intention", choices=INTENTION_MODES, default="oracle",
+    run.add_argument("--intention", choices=INTENTION_MODES, default=ORACLE,
                      help="oracle: the robot observes the intention (the thesis's simulation, default); "
                           "bayes: it recognises it with the Bayesian network of Sec 2.3 (docs/INTENTION.md)")
     run.add_argument("--save-intention", metavar="FILE",
@@ -131,7 +133,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_common_arguments(rp)
     b = sub.add_parser("bench", help="iterations per second (one core) and the 20-seed wall time")
     b.add_argument("--iterations", type=_int_at_least(100), default=20000, help="iterations of the single-core run")
-    b.add_argument("--intention", choices=INTENTION_MODES, default="oracle",
+    b.add_argument("--intention", choices=INTENTION_MODES, default=ORACLE,
                    help="bayes: also time the recogniser (one recognition, its share of learning) and the "
                         "bayes-mode iteration against the oracle one")
     b.add_argument("--json", action="store_true")
@@ -145,9 +147,9 @@ def config_from_args(args) -> tuple[RunConfig, list[int]]:
         pseudo_update=False if args.no_pseudo else None, scenario=args.scenario, overrides=tuple(args.set),
         load_q=getattr(args, "load_q", None), save_q=getattr(args, "save_q", None), trace=getattr(args, "trace", None),
         policy=getattr(args, "policy", "objectq"), adaptive_dod=getattr(args, "adaptive_dod", False),
-        intention=getattr(args, "intention", "oracle"), load_intention=getattr(args, "load_intention", None),
+        intention=getattr(args, "intention", ORACLE), load_intention=getattr(args, "load_intention", None),
         save_intention=getattr(args, "save_intention", None))
-    if cfg.intention != "bayes" and (cfg.load_intention or cfg.save_intention):
+    if cfg.intention != BAYES and (cfg.load_intention or cfg.save_intention):
         raise UserError(f"{'--save-intention' if cfg.save_intention else '--load-intention'} needs --intention bayes")
     if cfg.adaptive_dod and cfg.policy not in ("objectq", "nofeedback"):
         raise UserError(f"--adaptive-dod needs --policy objectq or nofeedback (a DoD-weighted Object-Q robot), not {cfg.policy}")
@@ -176,7 +178,7 @@ def cmd_run(args) -> int:
     for f, what in ((cfg.load_q, "Q-table"), (cfg.load_intention, "intention model")):
         if f and not Path(f).is_file():
             raise UserError(f"{what} file not found: {f}")
-    if cfg.intention == "bayes" and sc.observations is None:
+    if cfg.intention == BAYES and sc.observations is None:
         raise UserError(f"--intention bayes: scenario {sc.source} has no 'observations' block (docs/INTENTION.md)")
     if cfg.load_intention:
         from homeo_intention.model import IntentionModel
@@ -306,7 +308,7 @@ def cmd_report(args) -> int:
 def cmd_bench(args) -> int:
     from homeo_decision.scenario import load_scenario
 
-    if args.intention == "bayes":
+    if args.intention == BAYES:
         from homeo_intention.bench import bench_intention, format_bench
 
         res = bench_intention(args.iterations)

@@ -1,27 +1,12 @@
-"""The in-process thesis simulation (Section 4.2): world, human, body and robot in one loop.
+"""The in-process thesis simulation (Section 4.2): a robot in the simulated home, one loop.
 
-One iteration (tick t):
-  1. the robot perceives drives and world (the human's intention included) and picks an
-     action by softmax (Algorithm 1 lines 2-17);
-  2. the world and the body apply the action's effects (Table 4.1);
-  3. the human answers with feedback and maybe a proposal (Algorithm 2 lines 8-19);
-  4. feedback moves NAch, drives grow with time (Table 4.2), and the human decides what
-     it wants next (Algorithm 2 lines 3-6);
-  5. the robot perceives the new state s' and learns (Eq 3.14, 3.23);
-  6. the metrics record d(t) after the iteration.
-
-With ``intention="bayes"`` the robot no longer sees the human's intention: it recognises it from
-the human's observations (Section 2.3, ``homeo_intention``). One tick t of that loop, in the
-order the ROS node graph replicates (docs/INTENTION.md):
-  obs_t = human.observe(); rec_t = model.recognise(obs_t);
-  perceived code = the true world code with the intention replaced by rec_t.intention;
-  p = robot.perceive(drives, perceived code); a = robot.select(p, t);
-  world.execute(a) (the true world); body.apply_action; drives.apply_action(perceived code, a);
-  resp = human.respond(a) (the true intention); model.learn(obs_t, resp.clarified);
-  drives.apply_feedback; body.apply_time; drives.apply_time(rec_t.intention != 0 or feedback != 0,
-  resp.satisfied); drives.set_body; human.advance; world.set_human; obs/recognition/perceive of
-  t+1; robot.learn. HSR and the other metrics use the human's true expressed/satisfied.
-The oracle mode keeps the loop below unchanged (bit-identical results, full speed).
+One iteration (tick t) is ``homeo_decision.robot.run_loop``: the robot recognises the human's
+intention (or, in the thesis's own setting, observes it), perceives its drives and the world
+(Eq 3.2-3.3) and picks an action by softmax (Algorithm 1 lines 2-17); the environment applies it
+(Table 4.1), the human answers (Algorithm 2 lines 8-19), time passes (Table 4.2) and the human
+decides what it wants next (lines 3-6); at tick t+1 the robot learns from tick t (Eq 3.14, 3.23)
+before it chooses again. The metrics record d(t) after the iteration. The node graph runs the
+very same objects, split across processes.
 """
 
 from __future__ import annotations
@@ -31,13 +16,12 @@ from dataclasses import dataclass, field, replace
 from typing import Callable, Iterable, TextIO
 
 from homeo_decision import qtable_io
-from homeo_decision.drives import DriveModel
+from homeo_decision.robot import OracleRecognition, Robot, run_loop
 from homeo_decision.scenario import Scenario, load_scenario
+from homeo_msgs_py.graph import BAYES, ORACLE
 
-from .body import SimBody
-from .human import SimHuman
+from .environment import SimEnvironment
 from .metrics import MetricRecorder, accuracy_ends
-from .world import World
 
 
 @dataclass(frozen=True)
@@ -55,12 +39,9 @@ class RunConfig:
     series: bool = False  # keep the per-iteration metric series
     policy: str = "objectq"  # see POLICIES
     adaptive_dod: bool = False
-    intention: str = "oracle"  # "oracle": the intention is observed (the thesis's simulation); "bayes": recognised
+    intention: str = ORACLE  # ORACLE: the intention is observed (the thesis's simulation); BAYES: recognised
     load_intention: str | None = None  # start the bayes recogniser from a saved model
     save_intention: str | None = None
-
-
-INTENTION_MODES = ("oracle", "bayes")
 
 
 @dataclass
@@ -91,145 +72,72 @@ def cached_scenario(cfg: RunConfig) -> Scenario:
 
 
 class Simulation:
-    """World, human, body and robot wired as in the thesis's simulation."""
+    """The simulated home and a robot, wired as in the thesis's simulation."""
 
     def __init__(self, sc: Scenario, cfg: RunConfig):
         self.sc = sc
         self.cfg = cfg
-        self.world = World(sc)
-        self.human = SimHuman(sc, cfg.seed)
-        self.body = SimBody(sc)
-        self.drives = DriveModel(sc)
-        self.robot = make_robot(sc, cfg)
+        self.policy = make_decision(sc, cfg)
         self.load_report = None
         if cfg.load_q:
-            self.load_report = qtable_io.load(self.robot.q, cfg.load_q)
-        self.model = make_intention_model(sc, cfg)  # None in oracle mode: the fast loop
+            self.load_report = qtable_io.load(self.policy.q, cfg.load_q)
+        self.recognition = make_recognition_of(sc, cfg)
+        self.robot = Robot(sc, self.policy, self.recognition)
+        self.env = SimEnvironment(sc, cfg.seed, cues=cfg.intention == BAYES)
+
+    @property
+    def model(self):
+        """The intention model of a bayes run (None in oracle mode)."""
+        return getattr(self.recognition, "model", None)
 
     def run(self, iterations: int, trace: TextIO | None = None, on_tick: Callable[[int], None] | None = None,
             keep_actions: bool = False) -> EpisodeResult:
-        if self.model is not None:
-            return self.run_recognised(iterations, trace, on_tick, keep_actions)
-        sc, world, human, body, drives, robot = self.sc, self.world, self.human, self.body, self.drives, self.robot
+        sc, robot = self.sc, self.robot
         rec = MetricRecorder(sc.drive_names, [d.threshold for d in sc.drives])
-        span_action = sc.open["reward_span"] == "action"
+        record = rec.record
+        per = robot.perception
         # d(t) of the metrics: after the whole iteration, or before the time increase (open choice)
-        sample_after_action = sc.open["metrics_sample"] == "after_action"
-        actions = []
+        sample_after = sc.open["metrics_sample"] == "after_action"
+        bayes = self.cfg.intention == BAYES
+        actions: list = []
+        hits: list = []
+        dec = robot.decision
 
-        human.advance(world.code)  # Algorithm 2 lines 1-6: the first intention
-        world.set_human(human.present, human.intention)
-        drives.set_body(body.values)
-        p = robot.perceive(drives.values, world.code)
-        for t in range(iterations):
-            a = robot.select(p, t)
-            before = world.execute(a)
-            body.apply_action(before, a)
-            drives.apply_action(before, a)
-            expressed = human.intention != 0
-            resp = human.respond(a)
-            drives.apply_feedback(resp.feedback)
-            after_action = None
-            if span_action or sample_after_action:
-                drives.set_body(body.values)
-                after_action = tuple(drives.values)
-            body.apply_time()
-            drives.apply_time(expressed, resp.satisfied)
-            drives.set_body(body.values)
-            human.advance(world.code)
-            world.set_human(human.present, human.intention)
-            p_next = robot.perceive(drives.values, world.code)
-            learned = robot.learn(p, a, after_action if span_action else p_next.drives, resp.feedback,
-                                  resp.proposal, p_next, t)
-            rec.record(after_action if sample_after_action else p_next.drives, expressed, resp.satisfied)
+        def tick(t, p, r, a, out):
+            record(per.after_action if sample_after else per.drives, out.true_intention != 0, out.satisfied)
+            if bayes:
+                hits.append(r.intention == out.true_intention)
             if keep_actions:
                 actions.append(a)
             if trace is not None:
-                trace.write(json.dumps(trace_line(sc, t, p, a, resp, learned)) + "\n")
+                trace.write(json.dumps(trace_line(sc, t, p, a, out, dec.learned, r if bayes else None)) + "\n")
             if on_tick is not None:
                 on_tick(t)
-            p = p_next
-        res = EpisodeResult(self.cfg.seed, rec.summary(), rec.series() if self.cfg.series else None, self.load_report, actions)
-        return res
 
-    def run_recognised(self, iterations: int, trace: TextIO | None = None,
-                       on_tick: Callable[[int], None] | None = None, keep_actions: bool = False) -> EpisodeResult:
-        """The loop with a recogniser between the human and the robot (tick order in the module docstring)."""
-        sc, world, human, body, drives, robot, model = (self.sc, self.world, self.human, self.body, self.drives,
-                                                        self.robot, self.model)
-        rec = MetricRecorder(sc.drive_names, [d.threshold for d in sc.drives])
-        span_action = sc.open["reward_span"] == "action"
-        sample_after_action = sc.open["metrics_sample"] == "after_action"
-        with_intention = sc.c.with_intention
-        truth = model.needs_truth  # the oracle reads the true intention from the observation
-        actions, hits = [], []
-
-        human.advance(world.code)
-        world.set_human(human.present, human.intention)
-        drives.set_body(body.values)
-        obs = human.observe(truth)
-        r = model.recognise(obs)
-        p = robot.perceive(drives.values, with_intention[world.code][r.intention])
-        for t in range(iterations):
-            a = robot.select(p, t)
-            before = world.execute(a)  # the true world
-            body.apply_action(before, a)
-            drives.apply_action(p.code, a)  # the perceived world of tick t
-            true_it = human.intention
-            resp = human.respond(a)
-            model.learn(obs, resp.clarified)
-            drives.apply_feedback(resp.feedback)
-            after_action = None
-            if span_action or sample_after_action:
-                drives.set_body(body.values)
-                after_action = tuple(drives.values)
-            body.apply_time()
-            # the robot's NAch grows while it believes an intention is pending (Table 4.2, open `nach_growth`)
-            drives.apply_time(r.intention != 0 or resp.feedback != 0, resp.satisfied)
-            drives.set_body(body.values)
-            human.advance(world.code)
-            world.set_human(human.present, human.intention)
-            obs_next = human.observe(truth)
-            r_next = model.recognise(obs_next)
-            p_next = robot.perceive(drives.values, with_intention[world.code][r_next.intention])
-            learned = robot.learn(p, a, after_action if span_action else p_next.drives, resp.feedback,
-                                  resp.proposal, p_next, t)
-            rec.record(after_action if sample_after_action else p_next.drives, true_it != 0, resp.satisfied)
-            hits.append(r.intention == true_it)
-            if keep_actions:
-                actions.append(a)
-            if trace is not None:
-                line = trace_line(sc, t, p, a, resp, learned)
-                line |= {"true_intention": sc.intention_names[true_it] if true_it else None,
-                         "confidence": r.confidence, "clarified": sc.intention_names[resp.clarified]
-                         if resp.clarified is not None else None}
-                trace.write(json.dumps(line) + "\n")
-            if on_tick is not None:
-                on_tick(t)
-            p, obs, r = p_next, obs_next, r_next
+        fast = not (bayes or keep_actions or trace is not None or on_tick is not None)
+        run_loop(self.env, robot, iterations, self.env.observe(),
+                 (lambda t, p, r, a, out: record(per.after_action if sample_after else per.drives,
+                                                 out.true_intention != 0, out.satisfied)) if fast else tick)
         metrics = rec.summary()
-        metrics["intention_accuracy"] = accuracy_ends(hits)
+        if bayes:
+            metrics["intention_accuracy"] = accuracy_ends(hits)
         return EpisodeResult(self.cfg.seed, metrics, rec.series() if self.cfg.series else None, self.load_report,
-                             actions, hits)
+                             actions, hits if bayes else None)
 
 
-def make_intention_model(sc: Scenario, cfg: RunConfig):
-    """The recogniser of a run: None in oracle mode (the fast loop reads the intention itself)."""
-    if cfg.intention not in INTENTION_MODES:
-        raise ValueError(f"unknown intention mode {cfg.intention!r}; known: {', '.join(INTENTION_MODES)}")
-    if cfg.intention == "oracle":
-        if cfg.load_intention or cfg.save_intention:
-            raise ValueError("--load-intention/--save-intention need --intention bayes")
-        return None
-    from homeo_intention.model import IntentionModel
+def make_recognition_of(sc: Scenario, cfg: RunConfig):
+    """The robot's recognition part: the oracle (the thesis's simulation) or the Bayesian network."""
+    from homeo_intention.recognition import make_recognition
 
-    model = IntentionModel(sc)
+    if cfg.intention == ORACLE and (cfg.load_intention or cfg.save_intention):
+        raise ValueError("--load-intention/--save-intention need --intention bayes")
+    rec = make_recognition(cfg.intention, sc)
     if cfg.load_intention:
-        model.load(cfg.load_intention)
-    return model
+        rec.model.load(cfg.load_intention)
+    return rec
 
 
-def make_robot(sc: Scenario, cfg: RunConfig):
+def make_decision(sc: Scenario, cfg: RunConfig):
     """The decision maker of a run. Any policy offers DecisionCore's perceive / select / learn
     and a ``q`` attribute when it has a table to save or load (see homeo_decision.baselines)."""
     from homeo_decision.adaptive_dod import AdaptiveDoDRobot
@@ -249,21 +157,27 @@ def make_robot(sc: Scenario, cfg: RunConfig):
     return robot
 
 
-def trace_line(sc: Scenario, t: int, p, a: int, resp, learned) -> dict:
+def trace_line(sc: Scenario, t: int, p, a: int, out, learned, recognised=None) -> dict:
     """One JSON line of ``--trace``: the state the robot decided in and what followed."""
     it = sc.c.intention_of[p.code]
-    return {
+    line = {
         "tick": t,
         "drives": dict(zip(sc.drive_names, p.drives)),
         "intensities": dict(zip(sc.motivation_names, p.intensities)),
         "m_dom": sc.motivation_names[p.m_dom],
         "intention": sc.intention_names[it] if it else None,
         "action": sc.actions[a].name,
-        "feedback": resp.feedback,
-        "proposal": sc.actions[resp.proposal].name if resp.proposal is not None else None,
+        "feedback": out.feedback,
+        "proposal": sc.actions[out.proposal].name if out.proposal is not None else None,
         "reward": learned.reward,
         "pseudo_reward": learned.pseudo_reward,
     }
+    if recognised is not None:
+        true_it = out.true_intention
+        line |= {"true_intention": sc.intention_names[true_it] if true_it else None,
+                 "confidence": recognised.confidence,
+                 "clarified": sc.intention_names[out.clarified] if out.clarified is not None else None}
+    return line
 
 
 def run_episode(cfg: RunConfig, sc: Scenario | None = None, on_tick=None, keep_actions: bool = False) -> EpisodeResult:
@@ -275,7 +189,7 @@ def run_episode(cfg: RunConfig, sc: Scenario | None = None, on_tick=None, keep_a
     else:
         res = sim.run(cfg.iterations, on_tick=on_tick, keep_actions=keep_actions)
     if cfg.save_q:
-        robot = sim.robot
+        robot = sim.policy
         qtable_io.save(robot.q, cfg.save_q, meta={
             "iterations": cfg.iterations, "seed": cfg.seed, "policy": cfg.policy, "adaptive_dod": cfg.adaptive_dod,
             "dod": getattr(robot, "dod", None), "xi": getattr(robot, "xi", None),

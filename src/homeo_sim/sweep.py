@@ -125,7 +125,7 @@ def run_job(cfg: RunConfig, curves: bool = False) -> JobResult:
     secure = (drives < INSECURE).all(axis=1)
     w_hsr, w_rsr = window_rates(s["expressed"], s["satisfied"], secure, LEARNING_WINDOW)
     out = JobResult(cfg.seed, res.metrics, learning_speed(w_hsr, w_rsr))
-    ctl = getattr(sim.robot, "controller", None)
+    ctl = getattr(sim.policy, "controller", None)
     if ctl is not None:
         out.extra["dod_final"] = ctl.dod
         hist = ctl.history

@@ -1,0 +1,52 @@
+"""The robot's recognition part (``homeo_decision.robot``), as the intention node hosts it.
+
+Tick t first learns from tick t-1 (its cues, and the intention the human revealed in its outcome,
+if any), then recognises tick t from its cues alone: the true intention in an observation is
+never read. ``make_recognition`` also gives the oracle (the thesis's own simulation).
+"""
+
+from __future__ import annotations
+
+from homeo_decision.environment import Observation, Outcome
+from homeo_decision.robot import OracleRecognition
+from homeo_decision.scenario import OBS_CHANNELS, Scenario
+from homeo_msgs_py.graph import BAYES, INTENTION_MODES, ORACLE
+
+from .model import IntentionModel, Recognition
+
+
+class BayesRecognition:
+    learns = True
+
+    def __init__(self, sc: Scenario, model: IntentionModel | None = None, **settings):
+        self.model = model if model is not None else IntentionModel(sc, **settings)
+        self._prev: dict | None = None
+
+    def restart(self) -> None:
+        """A new episode: what the model learned about this user stays."""
+        self._prev = None
+
+    @staticmethod
+    def _cues(obs: Observation) -> dict:
+        cues = obs.cues or {}
+        return {ch: cues.get(ch) for ch in OBS_CHANNELS}
+
+    def check(self, obs: Observation) -> None:
+        """Raises UnknownObservation for a symbol outside the scenario's alphabets."""
+        self.model.recognise(self._cues(obs))
+
+    def tick(self, obs: Observation, out: Outcome | None) -> Recognition:
+        if out is not None and self._prev is not None:
+            self.model.learn(self._prev, out.clarified)
+        cues = self._cues(obs)
+        r = self.model.recognise(cues)
+        self._prev = cues
+        return r
+
+
+def make_recognition(mode: str, sc: Scenario, **settings):
+    if mode == ORACLE:
+        return OracleRecognition(sc)
+    if mode == BAYES:
+        return BayesRecognition(sc, **settings)
+    raise ValueError(f"unknown intention mode {mode!r}; known: {', '.join(INTENTION_MODES)}")

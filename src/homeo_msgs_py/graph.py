@@ -1,0 +1,132 @@
+"""The graph, described once, as data: topics, their schemas and QoS kind, the nodes, what each
+node publishes and reads, and which inputs join into one of its ticks.
+
+Launchers start the nodes and wait for the endpoints from here, every node takes its topics and
+tick join from here, the tests' in-memory bus routes by it, and docs/GRAPH.md prints it
+(``python -m homeo_msgs_py.graph``). Topic names are relative, so a namespace
+(``--ros-args -r __ns:=/r1``) moves a whole graph.
+
+Tick k of a node waits for each input at tick ``k + offset``: the drives node needs the outcome
+of the tick before (offset -1; tick 0 needs none).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+STATE, EVENT = "state", "event"  # state topics are latched, events are not (qos.py)
+
+# intention recognition: observe the true intention (the thesis's simulation) or recognise it
+ORACLE, BAYES = "oracle", "bayes"
+INTENTION_MODES = (ORACLE, BAYES)
+
+
+@dataclass(frozen=True)
+class Topic:
+    name: str  # relative ROS name
+    schema: str  # homeo_msgs_py.schemas
+    kind: str  # STATE or EVENT
+
+
+@dataclass(frozen=True)
+class Input:
+    topic: str  # key of TOPICS
+    offset: int = 0  # tick k reads this input of tick k + offset
+    learning_only: bool = False  # read only when the intention node learns (bayes mode)
+
+
+@dataclass(frozen=True)
+class NodeDesc:
+    name: str
+    module: str  # run as ``python -m MODULE``
+    role: str  # world | intention | drives | decision
+    publishes: tuple  # keys of TOPICS
+    inputs: tuple  # of Input
+    services: tuple = ()  # relative to the node (~/...)
+    joins: bool = True  # its inputs join into ticks (the world nodes pace the ticks themselves)
+
+    def reads(self, learning: bool) -> tuple:
+        return tuple(i for i in self.inputs if learning or not i.learning_only)
+
+    def join_offsets(self, learning: bool) -> dict:
+        """``TickJoin`` offsets of this node: input topic key -> offset."""
+        return {i.topic: i.offset for i in self.reads(learning)}
+
+
+TOPICS: dict[str, Topic] = {
+    "world": Topic("homeo/world", "homeo/world", STATE),
+    "observation": Topic("homeo/observation", "homeo/observation", EVENT),
+    "intention": Topic("homeo/intention", "homeo/intention", STATE),
+    "drives": Topic("homeo/drives", "homeo/drives", STATE),
+    "action": Topic("homeo/action", "homeo/action", EVENT),
+    "outcome": Topic("homeo/outcome", "homeo/outcome", EVENT),
+    "run_status": Topic("homeo/run_status", "homeo/run_status", STATE),
+}
+DIAGNOSTICS = "/diagnostics"  # absolute: every node reports to the one aggregator topic
+DEVICE = "homeo/device"  # std_msgs/String plain JSON from the Pepper bridge (Play/Stop/... commands)
+
+_WORLD_PUBLISHES = ("world", "observation", "outcome", "run_status")
+NODES: dict[str, NodeDesc] = {
+    "homeo_sim": NodeDesc("homeo_sim", "homeo_sim.node", "world", _WORLD_PUBLISHES, (Input("action"),),
+                          ("~/reset",), joins=False),
+    "pepper_bridge": NodeDesc("pepper_bridge", "pepper_bridge.node", "world", _WORLD_PUBLISHES, (Input("action"),),
+                              joins=False),
+    "homeo_intention": NodeDesc("homeo_intention", "homeo_intention.node", "intention", ("intention",),
+                                (Input("observation"), Input("outcome", -1, learning_only=True)),
+                                ("~/save_model", "~/load_model")),
+    "homeo_drives": NodeDesc("homeo_drives", "homeo_decision.drives_node", "drives", ("drives",),
+                             (Input("world"), Input("intention"), Input("outcome", -1))),
+    "homeo_decision": NodeDesc("homeo_decision", "homeo_decision.node", "decision", ("action",),
+                               (Input("drives"),), ("~/save_q", "~/load_q", "~/reset")),
+}
+ROBOT_NODES = ("homeo_intention", "homeo_drives", "homeo_decision")
+GRAPHS: dict[str, tuple] = {
+    "sim": ("homeo_sim",) + ROBOT_NODES,
+    "pepper": ("pepper_bridge",) + ROBOT_NODES,
+}
+
+
+def topic_name(key: str) -> str:
+    return TOPICS[key].name
+
+
+def schema_of(key: str) -> str:
+    try:
+        return TOPICS[key].schema
+    except KeyError:
+        raise KeyError(f"{key} is not a homeo topic; known: {', '.join(TOPICS)}") from None
+
+
+def endpoints(graph: str, learning: bool) -> dict[str, tuple[int, int]]:
+    """(writers, readers) of every joined topic in ``graph`` (the launcher waits for all of them)."""
+    out: dict[str, list] = {}
+    for n in GRAPHS[graph]:
+        node = NODES[n]
+        for t in node.publishes:
+            if t != "run_status":  # read by the launcher, not by a node
+                out.setdefault(t, [0, 0])[0] += 1
+        for i in node.reads(learning):
+            out.setdefault(i.topic, [0, 0])[1] += 1
+    return {t: (w, r) for t, (w, r) in out.items()}
+
+
+def readers(graph: str, topic: str, learning: bool) -> int:
+    """How many nodes of ``graph`` read ``topic`` (a world node's start gate waits for them)."""
+    return endpoints(graph, learning).get(topic, (0, 0))[1]
+
+
+def describe() -> str:
+    """The graph as a markdown table (docs/GRAPH.md)."""
+    lines = ["| node | role | publishes | reads (tick offset) | services |", "|---|---|---|---|---|"]
+    for n in NODES.values():
+        reads = ", ".join(f"{TOPICS[i.topic].name} ({i.offset:+d})" + (" bayes only" if i.learning_only else "")
+                          for i in n.inputs)
+        lines.append(f"| {n.name} | {n.role} | {', '.join(TOPICS[t].name for t in n.publishes)} | {reads} | "
+                     f"{', '.join(n.services) or '-'} |")
+    lines += ["", "| topic | schema | kind |", "|---|---|---|"]
+    lines += [f"| {t.name} | {t.schema} | {t.kind} |" for t in TOPICS.values()]
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    print(describe())

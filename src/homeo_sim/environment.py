@@ -1,0 +1,80 @@
+"""The thesis's simulated home behind the environment boundary (``homeo_decision.environment``).
+
+World, human and body in the order of one iteration of Section 4.2.1: the action's effects on the
+world and the body (Table 4.1), the human's answer (Algorithm 2 lines 8-19), the body's time
+increase (Table 4.2), the human's next wish and presence (lines 3-6). The in-process runner and
+the simulation node both drive this object.
+"""
+
+from __future__ import annotations
+
+from homeo_decision.environment import Observation, Outcome
+from homeo_decision.scenario import Scenario
+
+from .body import SimBody
+from .human import NO_RESPONSE, SimHuman
+from .world import World
+
+
+class SimEnvironment:
+    """``reset`` / ``observe`` / ``step`` over the simulated world, human and body.
+
+    ``cues``: draw what the robot sees of the human (gesture, movement, keyword: the scenario's
+    ``observations``) in every observation; they come from the human's own "observation" stream,
+    so drawing them or not leaves everything else unchanged. The true intention is always in the
+    observation (an oracle reads it; a recogniser ignores it)."""
+
+    def __init__(self, sc: Scenario, seed: int = 0, cues: bool = False):
+        self.sc = sc
+        self.world = World(sc)
+        self.human = SimHuman(sc, seed)
+        self.body = SimBody(sc)
+        self.cues = cues and sc.observations is not None
+        self._unseen = [w[0] for w in sc.c.with_intention]  # the world code with the intention `none`
+        # the body right after the action is needed by these two open choices only
+        self.keep_after = sc.open["reward_span"] == "action" or sc.open["metrics_sample"] == "after_action"
+        self._start(seed)
+
+    @property
+    def seed(self) -> int:
+        return self.human.seed
+
+    def reset(self, seed: int | None = None) -> Observation:
+        self._start(seed)
+        return self.observe()
+
+    def _start(self, seed: int | None) -> None:
+        self.world.reset()
+        self.human.reset(seed)
+        self.body.reset()
+        self.tick = 0
+        self._advance_human()  # Algorithm 2 lines 1-6: the first intention
+
+    def _advance_human(self) -> None:
+        h = self.human
+        h.advance(self.world.code)
+        self.world.set_human(h.present, h.intention)
+        self._cues = h.observe() if self.cues else None  # how the human shows its wish this tick
+
+    def observe(self) -> Observation:
+        """The body is the live list of readings (read it before the next ``step``)."""
+        return Observation(self._unseen[self.world.code], self.body.values, self.human.intention, self._cues)
+
+    def step(self, action: int | None) -> Outcome:
+        world, body = self.world, self.body
+        it = self.human.intention
+        if action is not None:
+            before = world.execute(action)
+            body.apply_action(before, action)
+            resp = self.human.respond(action)
+        else:
+            resp = NO_RESPONSE
+        after = list(body.values) if self.keep_after else None
+        body.apply_time()
+        h = self.human  # _advance_human, inlined: once per tick
+        h.advance(world.code)
+        world.set_human(h.present, h.intention)
+        if self.cues:
+            self._cues = h.observe()
+        self.tick += 1
+        return Outcome(action, resp.feedback, resp.proposal, resp.clarified, after, it, resp.satisfied)
