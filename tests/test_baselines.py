@@ -12,7 +12,7 @@ from homeo_decision.adaptive_dod import AdaptiveDoD, AdaptiveDoDRobot, AdaptiveD
 from homeo_decision.agent import DecisionCore
 from homeo_decision.baselines import POLICIES, FlatQ, RandomPolicy, RulePolicy, make_policy
 from homeo_decision.qtable_io import QTableError
-from homeo_sim.runner import RunConfig, make_robot, run_episode
+from homeo_sim.runner import RunConfig, make_decision, run_episode
 
 NAch, NSoc, NRes, NEng = range(4)
 
@@ -154,9 +154,9 @@ def test_every_policy_runs_and_repeats_with_its_seed(thesis, policy):
     assert all(0 <= x < len(thesis.actions) for x in a.actions)
 
 
-def test_make_robot_unknown_policy(thesis):
+def test_make_decision_unknown_policy(thesis):
     with pytest.raises(ValueError, match="unknown policy"):
-        make_robot(thesis, RunConfig(policy="oracle"))
+        make_decision(thesis, RunConfig(policy="oracle"))
 
 
 @pytest.mark.parametrize("policy", ["random", "rule", "flatq"])

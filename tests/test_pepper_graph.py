@@ -29,8 +29,8 @@ START_S = 60.0
 ROBOT = "pepper_bridge: robot"
 NRES = {0: 0.0, 1: 50.0, 2: 80.0, 3: 100.0}  # Table 4.6
 
-LAUNCH = ("import sys; from homeo_sim.cli import _Parser; from pepper_bridge.launch_pepper import add_parser, cmd_pepper;"
-          "ap = _Parser(prog='homeo-launch'); sub = ap.add_subparsers(dest='cmd', required=True); add_parser(sub);"
+LAUNCH = ("import sys; from homeo_sim.cli import Parser; from pepper_bridge.launch_pepper import add_parser, cmd_pepper;"
+          "ap = Parser(prog='homeo-launch'); sub = ap.add_subparsers(dest='cmd', required=True); add_parser(sub);"
           "sys.exit(cmd_pepper(ap.parse_args(sys.argv[1:])))")
 
 

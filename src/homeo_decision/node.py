@@ -1,7 +1,8 @@
-"""``homeo_decision`` node: Object-Q selection and learning (Algorithm 1).
+"""``homeo_decision`` node: the robot's decision part (``homeo_decision.robot.Decision``), Object-Q
+selection and learning (Algorithm 1).
 
-Publishes  /homeo/action (event), /diagnostics
-Subscribes /homeo/drives (state: drives, m_dom, the world they were perceived in, and the
+Publishes  homeo/action (event), /diagnostics
+Subscribes homeo/drives (state: drives, m_dom, the world they were perceived in, and the
            outcome of the last tick: executed action, feedback, proposal)
 Services   ~/save_q, ~/load_q (std_srvs/Trigger: the file in q_table_path),
            ~/reset (forget the Q-table and reseed)
@@ -10,8 +11,8 @@ Parameters dod [0, 1] (Eq 3.27), xi >= 0 (Eq 3.20), gamma [0, 1] (Eq 3.14), feed
            load_on_start; all but the last take effect on the next tick.
 
 Tick k needs only the drives of tick k, which carry the outcome of tick k-1 as the drives
-node took it in: learn from k-1, then choose for k (``RobotStep``). One input per tick keeps
-the decision off the join and saves a delivery per tick (``homeo-launch bench``).
+node took it in: learn from k-1, then choose for k. One input per tick keeps the decision off
+the join and saves a delivery per tick (``homeo-launch bench``).
 """
 
 from __future__ import annotations
@@ -22,22 +23,25 @@ from pathlib import Path
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
 from std_srvs.srv import Trigger
 
+from homeo_msgs_py.graph import NODES
 from homeo_msgs_py.lockstep import TickJoin
-from homeo_msgs_py.node_base import HomeoNode, NodeConfigError, run_node
-from homeo_msgs_py.topics import ACTION, DRIVES
+from homeo_msgs_py.node_base import NodeConfigError
 
-from . import qtable_io
+from . import codec, qtable_io
 from .agent import DecisionCore
-from .robot_step import DecisionStage
+from .node_runtime import ScenarioNode, run_scenario_node
+from .robot import Decision
+
+DESC = NODES["homeo_decision"]
 
 
 def _float_param(lo: float, hi: float, text: str) -> ParameterDescriptor:
     return ParameterDescriptor(description=text, floating_point_range=[FloatingPointRange(from_value=lo, to_value=hi)])
 
 
-class DecisionNode(HomeoNode):
+class DecisionNode(ScenarioNode):
     def __init__(self):
-        super().__init__("homeo_decision")
+        super().__init__(DESC.name)
         L = self.sc.learning
         self.declare_parameter("dod", float(L["dod"]), _float_param(0.0, 1.0, "Degree of Dedication (Eq 3.27)"))
         self.declare_parameter("xi", float(L["xi"]), _float_param(0.0, 1000.0, "motivation factor xi (Eq 3.20)"))
@@ -54,7 +58,7 @@ class DecisionNode(HomeoNode):
         p = lambda n: self.get_parameter(n).value  # noqa: E731
         self.core = DecisionCore(self.sc, p("seed"), dod=p("dod"), xi=p("xi"), gamma=p("gamma"),
                                  pseudo_update=p("pseudo_update"), feedback=p("feedback"))
-        self.stage = DecisionStage(self.core)
+        self.decision = Decision(self.core)
         self.q_path = p("q_table_path")
         if p("load_on_start"):
             ok, msg = self._load()
@@ -63,9 +67,9 @@ class DecisionNode(HomeoNode):
             self.get_logger().info(msg)
         self.add_on_set_parameters_callback(self._on_params)
 
-        self.join = TickJoin({"drives": 0})
-        self.pub = self.publisher(ACTION, min_subs=1)
-        self.subscribe(DRIVES, lambda m: self._put("drives", m))
+        self.join = TickJoin(DESC.join_offsets(learning=True))
+        self.pub = self.publisher("action", min_subs=1)
+        self.subscribe("drives", lambda m: self._put("drives", m))
         self.create_service(Trigger, "~/save_q", self._on_save)
         self.create_service(Trigger, "~/load_q", self._on_load)
         self.create_service(Trigger, "~/reset", self._on_reset)
@@ -94,13 +98,17 @@ class DecisionNode(HomeoNode):
         run = self.join.run
         done = self.join.put(name, msg)
         if self.join.run != run:
-            self.stage.restart()
+            self.decision.restart()
         for k, inputs in done:
-            self._tick(k, inputs)
+            self._tick(k, inputs["drives"].fields)
 
-    def _tick(self, k: int, inputs: dict) -> None:
-        fields = self.stage.tick(k, inputs["drives"].fields)
-        self.send(self.pub, k, fields, self.join.run)
+    def _tick(self, k: int, d: dict) -> None:
+        sc, core = self.sc, self.core
+        perceived, out, after, final = codec.perception_from_fields(sc, d)
+        a = self.decision.tick(k, perceived, out, after, final)
+        params = {"dod": core.dod, "xi": core.xi, "gamma": core.gamma, "feedback": core.use_feedback,
+                  "pseudo_update": core.pseudo}
+        self.send(self.pub, k, codec.action_fields(sc, a, d, core.phase(k).tau, params, final), self.join.run)
 
     # -- services -------------------------------------------------------------------------
     def _load(self) -> tuple[bool, str]:
@@ -139,13 +147,13 @@ class DecisionNode(HomeoNode):
 
     def _on_reset(self, request, response):
         self.core.reset()
-        self.stage.restart()
+        self.decision.restart()
         response.success, response.message = True, f"Q-table cleared, decision stream reseeded with {self.core.seed}"
         return response
 
 
 def main(args=None) -> int:
-    return run_node(DecisionNode, args)
+    return run_scenario_node(DecisionNode, args)
 
 
 if __name__ == "__main__":

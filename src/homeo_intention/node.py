@@ -1,8 +1,8 @@
-"""``homeo_intention`` node: the user's intention as the robot recognises it.
+"""``homeo_intention`` node: the robot's recognition part (``homeo_intention.recognition``).
 
-Publishes  /homeo/intention (state: the recognised intention and its posterior, Eq 2.10), /diagnostics
-Subscribes /homeo/observation (event: gesture, movement, keyword; and the true intention, which
-           only the oracle reads), and in bayes mode /homeo/outcome (event: a proposal or
+Publishes  homeo/intention (state: the recognised intention and its posterior, Eq 2.10), /diagnostics
+Subscribes homeo/observation (event: gesture, movement, keyword; and the true intention, which
+           only the oracle reads), and in bayes mode homeo/outcome (event: a proposal or
            clarification reveals the intention, and the network learns by EM)
 Services   ~/save_model, ~/load_model (std_srvs/Trigger: the file in model_path; bayes mode)
 Parameters mode ('bayes': the Bayesian network of Section 2.3; 'oracle': the thesis's simulation,
@@ -20,53 +20,59 @@ from pathlib import Path
 from rcl_interfaces.msg import ParameterDescriptor
 from std_srvs.srv import Trigger
 
+from homeo_decision import codec
+from homeo_decision.node_runtime import ScenarioNode, run_scenario_node
+from homeo_msgs_py.graph import BAYES, INTENTION_MODES, NODES
 from homeo_msgs_py.lockstep import TickJoin
-from homeo_msgs_py.node_base import HomeoNode, NodeConfigError, run_node
+from homeo_msgs_py.node_base import NodeConfigError
 from homeo_msgs_py.schemas import Rejected
-from homeo_msgs_py.topics import INTENTION, OBSERVATION, OUTCOME
 
-from .observation import UnknownObservation
-from .stage import MODES, RecogniserStage
+from .recognition import make_recognition
+
+DESC = NODES["homeo_intention"]
 
 
-class IntentionNode(HomeoNode):
+class IntentionNode(ScenarioNode):
     def __init__(self):
-        super().__init__("homeo_intention")
-        self.declare_parameter("mode", "bayes", ParameterDescriptor(
-            description=f"recognition mode: {', '.join(MODES)}", read_only=True))
+        super().__init__(DESC.name)
+        self.declare_parameter("mode", BAYES, ParameterDescriptor(
+            description=f"recognition mode: {', '.join(INTENTION_MODES)}", read_only=True))
         self.declare_parameter("model_path", "", ParameterDescriptor(description="model file of ~/save_model, ~/load_model"))
         self.declare_parameter("load_on_start", False, ParameterDescriptor(
             description="load model_path when the node starts", read_only=True))
-        mode = self.get_parameter("mode").value
+        mode = self.mode = self.get_parameter("mode").value
         try:
-            self.stage = RecogniserStage(self.sc, mode)
+            self.part = make_recognition(mode, self.sc)
         except ValueError as exc:  # unknown mode, or a scenario without observation alphabets
             raise NodeConfigError(f"parameter mode: {exc}") from None
         if self.get_parameter("load_on_start").value:
             ok, msg = self._load()
             if not ok:
                 raise NodeConfigError(f"load_on_start: {msg}")
-        self.join = TickJoin({"observation": 0, "outcome": -1} if self.stage.learns else {"observation": 0})
-        self.pub = self.publisher(INTENTION)
-        self.subscribe(OBSERVATION, lambda m: self._put("observation", m))
-        if self.stage.learns:
-            self.subscribe(OUTCOME, lambda m: self._put("outcome", m))
+        learns = self.part.learns
+        self.join = TickJoin(DESC.join_offsets(learns))
+        self.pub = self.publisher("intention")
+        for i in DESC.reads(learns):
+            self.subscribe(i.topic, lambda m, key=i.topic: self._put(key, m))
         self.create_service(Trigger, "~/save_model", self._on_save)
         self.create_service(Trigger, "~/load_model", self._on_load)
 
-    def _put(self, name, msg) -> None:
-        if name == "observation":
+    def _put(self, key, msg) -> None:
+        sc = self.sc
+        if key == "observation":
             try:
-                self.stage.check(msg.fields)
-            except UnknownObservation as exc:
+                self.part.check(codec.observation_from_fields(sc, None, msg.fields))
+            except ValueError as exc:  # an unknown symbol, or the oracle without the intention
                 raise Rejected(str(exc)) from None
         run = self.join.run
-        done = self.join.put(name, msg)
+        done = self.join.put(key, msg)
         if self.join.run != run:
-            self.stage.restart()
+            self.part.restart()
         for k, inputs in done:
-            out = inputs.get("outcome")
-            fields = self.stage.tick(inputs["observation"].fields, out.fields if out is not None else None)
+            out = codec.outcome_from_fields(sc, inputs["outcome"].fields) if "outcome" in inputs else None
+            r = self.part.tick(codec.observation_from_fields(sc, None, inputs["observation"].fields), out)
+            fields = {"intention": sc.intention_names[r.intention], "posterior": dict(zip(sc.intention_names, r.posterior)),
+                      "mode": self.mode}
             self.send(self.pub, k, fields, self.join.run)
 
     # -- services -------------------------------------------------------------------------
@@ -74,7 +80,7 @@ class IntentionNode(HomeoNode):
         return self.get_parameter("model_path").value
 
     def _load(self) -> tuple[bool, str]:
-        if not self.stage.learns:
+        if not self.part.learns:
             return False, "the oracle has no model"
         path = self._path()
         if not path:
@@ -82,7 +88,7 @@ class IntentionNode(HomeoNode):
         if not Path(path).is_file():
             return False, f"model file not found: {path}"
         try:
-            self.stage.model.load(path)
+            self.part.model.load(path)
         except (ValueError, OSError) as exc:
             return False, str(exc)
         return True, f"loaded {path}"
@@ -93,12 +99,12 @@ class IntentionNode(HomeoNode):
 
     def _on_save(self, request, response):
         path = self._path()
-        if not self.stage.learns or not path:
+        if not self.part.learns or not path:
             response.success = False
-            response.message = "the oracle has no model" if not self.stage.learns else "model_path is not set"
+            response.message = "the oracle has no model" if not self.part.learns else "model_path is not set"
             return response
         try:
-            self.stage.model.save(path, meta={"node": self.get_name()})
+            self.part.model.save(path, meta={"node": self.get_name()})
         except (ValueError, OSError) as exc:
             response.success, response.message = False, str(exc)
             return response
@@ -107,7 +113,7 @@ class IntentionNode(HomeoNode):
 
 
 def main(args=None) -> int:
-    return run_node(IntentionNode, args)
+    return run_scenario_node(IntentionNode, args)
 
 
 if __name__ == "__main__":

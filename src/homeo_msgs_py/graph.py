@@ -90,6 +90,12 @@ def topic_name(key: str) -> str:
     return TOPICS[key].name
 
 
+def key_of(name: str) -> str | None:
+    """The key of a topic given by its name, with or without the leading slash (None: not ours)."""
+    bare = name.lstrip("/")
+    return next((k for k, t in TOPICS.items() if t.name == bare), None)
+
+
 def schema_of(key: str) -> str:
     try:
         return TOPICS[key].schema

@@ -10,7 +10,9 @@ handled is stale; one more than ``window`` ticks ahead cannot belong to this run
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
+from typing import Callable, Protocol
 
 from .schemas import Message, Rejected
 
@@ -55,3 +57,209 @@ class TickJoin:
     def _complete(self, k: int) -> bool:
         slot = self._pending.get(k, {})
         return all(n in slot for n, off in self.offsets.items() if k + off >= 0)
+
+
+# -- the world side of the lockstep ---------------------------------------------------------------
+WAITING, STARTING, RUNNING, FINISHING, DONE = "waiting", "starting", "running", "finishing", "done"
+RETRY_S = 0.5  # pause before observing again after a failed observation (a robot that is away)
+
+
+class WorldSide(Protocol):
+    """What a world node offers the driver, in message fields (``homeo_decision.codec``)."""
+
+    def start(self) -> None:
+        """Before tick 0 (a robot collects the user's first expression); may block."""
+
+    def observe(self, final: bool) -> tuple[dict, dict]:
+        """``homeo/world`` and ``homeo/observation`` fields of the current tick; may block or raise."""
+
+    def step(self, action_fields: dict | None) -> dict:
+        """Perform the tick's action (``homeo/action`` fields; None: no action came); the
+        ``homeo/outcome`` fields; may block."""
+
+    def step_failed(self, action_fields: dict | None, reason: str) -> dict:
+        """The outcome fields when ``step`` raised: nothing was done."""
+
+    def check_action(self, fields: dict, tick: int) -> None:
+        """Raise Rejected for an action message the world cannot use (e.g. no drives for the metrics)."""
+
+    def record(self, action_fields: dict | None) -> None:
+        """The robot's drives after the last tick came back with this action message (metrics)."""
+
+    def status(self, done: bool) -> dict:
+        """Extra ``homeo/run_status`` fields (``metrics``, ``extra``)."""
+
+
+class LockstepDriver:
+    """Tick k of a world node: observe, publish observation(k) and world(k), wait for action(k)
+    (a timeout counts as no action), step, publish outcome(k), then tick k+1. After the last tick a
+    final world lets the robot learn from the last outcome; the final message that answers it
+    carries the drives the metrics of the last tick need.
+
+    ROS-free: the node calls ``begin`` once its readers have matched, ``on_action`` for every
+    decoded action message (a ``Rejected`` it raises is the reason to drop it) and ``poll`` from a
+    timer; ``send(topic key, tick, fields, run)`` publishes. ``run_async(fn, *args)`` runs the
+    side's blocking calls off the executor and returns a future (a robot); without it they run
+    inline (the simulation, whose steps take microseconds)."""
+
+    def __init__(self, side: WorldSide, send: Callable, *, iterations: int, rate: float = 0.0, timeout: float = 5.0,
+                 run_async: Callable | None = None, log: Callable[[str], None] | None = None,
+                 clock: Callable[[], float] = time.monotonic):
+        self.side, self.send = side, send
+        self.iterations, self.rate, self.timeout = iterations, rate, timeout
+        self.run_async, self.log, self.clock = run_async, log or (lambda text: None), clock
+        self.run = 0
+        self.on_done: Callable[[], None] | None = None  # called once the run is done
+        self._reset_run()
+
+    def _reset_run(self) -> None:
+        self.state = WAITING
+        self.tick = 0
+        self.missed = 0
+        self.phase = ""  # within a tick: observe -> act -> step
+        self._job = None
+        self._job_kind = ""
+        self._retry_at = 0.0
+        self._action: Message | None = None
+        self._last_fields: dict | None = None  # the last action message's fields (drives for the metrics)
+        self._since = self.clock()
+        self._due: float | None = None
+        self._t_begin = self._t0 = self.clock()
+        self._t0_tick = 0
+        self.elapsed = 0.0
+
+    def restart(self) -> None:
+        """A new run from tick 0 (the node resets its side first)."""
+        self.run += 1
+        self._reset_run()
+
+    # -- progress --------------------------------------------------------------------------
+    def begin(self) -> None:
+        if self.state != WAITING:
+            return
+        self.state = STARTING
+        self._t_begin = self._t0 = self.clock()
+        self._t0_tick = 0
+        self._submit("start", self.side.start)
+
+    def _submit(self, kind: str, fn, *args) -> None:
+        if self.run_async is None:
+            try:
+                res, err = fn(*args), None
+            except Exception as exc:  # noqa: BLE001 - the side's failure becomes the tick's outcome
+                res, err = None, exc
+            self._done(kind, res, err, args)
+            return
+        self._job_kind, self._job_args = kind, args
+        self._job = self.run_async(fn, *args)
+
+    def _done(self, kind: str, res, err, args) -> None:
+        now = self.clock()
+        if kind == "start":
+            self.state = RUNNING
+            self.log(f"run {self.run}: {self.iterations or 'unbounded'} ticks")
+            self._observe()
+        elif kind == "observe":
+            if err is not None:
+                self.phase, self._retry_at = "retry", now + RETRY_S
+                self.log(f"observing tick {self.tick} failed ({err}); retrying")
+                return
+            world, seen = res
+            self.phase, self._since = "act", now
+            self.send("observation", self.tick, seen, self.run)  # first: the critical path starts here
+            self.send("world", self.tick, world, self.run)
+        elif kind == "step":
+            fields = res if err is None else self.side.step_failed(args[0], str(err))
+            self.send("outcome", self.tick, fields, self.run)
+            self.tick += 1
+            if self.iterations and self.tick >= self.iterations:
+                self.state = FINISHING  # the last drives come back with a final message
+            self._observe()
+
+    def _observe(self) -> None:
+        self.phase = "observe"
+        self._action = None
+        self._submit("observe", self.side.observe, self.state == FINISHING)
+
+    def poll(self) -> None:
+        """From a timer: finished jobs, retries, the rate, timeouts."""
+        now = self.clock()
+        if self._job is not None and self._job.done():
+            job, self._job = self._job, None
+            err = job.exception()
+            self._done(self._job_kind, None if err else job.result(), err, self._job_args)
+        if self.phase == "retry" and now >= self._retry_at:
+            self._observe()
+        if self._due is not None and now >= self._due:
+            self._due = None
+            self._advance()
+        if self.state in (RUNNING, FINISHING) and self.phase == "act" and self._action is None \
+                and now - self._since > self.timeout:
+            if self.state == FINISHING:
+                self._finish()
+                return
+            self.missed += 1
+            self.log(f"no action for tick {self.tick} within {self.timeout:g} s: counted as no action")
+            self._step(None)
+
+    # -- actions ---------------------------------------------------------------------------
+    def on_action(self, msg: Message) -> None:
+        if self.state not in (RUNNING, FINISHING):
+            raise Rejected(f"no run in progress (state {self.state})")
+        if msg.run != self.run:
+            raise Rejected(f"run {msg.run} is not the current run {self.run}")
+        k = self.tick
+        if msg.tick < k:
+            raise Rejected(f"stale tick {msg.tick} (now at tick {k})")
+        if msg.tick > k:
+            raise Rejected(f"tick {msg.tick} is ahead of the run (now at tick {k})")
+        if self._action is not None:
+            raise Rejected(f"duplicate action for tick {k}")
+        if self.phase != "act":
+            raise Rejected(f"an action for tick {k} before its world was published (phase {self.phase})")
+        f = msg.fields
+        if bool(f.get("final")) != (self.state == FINISHING):
+            raise Rejected("a final message before the run's end" if f.get("final")
+                           else f"an action after the run's end at tick {k}")
+        self.side.check_action(f, k)  # raises Rejected when the world cannot use it
+        self._last_fields = f
+        self._action = msg
+        self._advance()
+
+    def _advance(self) -> None:
+        if self.state == FINISHING:
+            self._finish()
+            return
+        if self.rate > 0:
+            due = self._t0 + (self.tick + 1 - self._t0_tick) / self.rate
+            if self.clock() < due:
+                self._due = due
+                return
+        self._step(self._action.fields)
+
+    def _step(self, action_fields: dict | None) -> None:
+        if self.tick > 0:
+            self.side.record(self._last_fields)  # the drives after tick k-1 came with this tick's action
+        self.phase = "step"
+        self._submit("step", self.side.step, action_fields)
+
+    def _finish(self) -> None:
+        self.side.record(self._last_fields)
+        self.state, self.phase = DONE, ""
+        self.elapsed = self.clock() - self._t_begin
+        self.log(f"run {self.run} done: {self.tick} ticks, {self.missed} missed")
+        if self.on_done is not None:
+            self.on_done()
+
+    def set_rate(self, rate: float) -> None:
+        self.rate = rate
+        self._t0, self._t0_tick = self.clock(), self.tick
+
+    def status_fields(self) -> dict:
+        fields = {"iterations": self.iterations, "done": self.state == DONE, "missed": self.missed,
+                  "state": self.state}
+        fields.update(self.side.status(self.state == DONE))
+        if self.state == DONE:
+            fields.setdefault("extra", {})
+            fields["extra"] = dict(fields["extra"] or {}, elapsed_s=self.elapsed, ticks=self.tick)
+        return fields

@@ -1,10 +1,10 @@
-"""What every homeo node shares: the scenario, validated subscriptions, gated publishers,
-/diagnostics, and the standard ``main`` (ros2/demos style: build, spin, always clean up).
+"""What every homeo node shares: validated subscriptions, gated publishers, /diagnostics, and the
+standard ``main`` (ros2/demos style: build, spin, always clean up). Scenario-free: the scenario's
+vocabulary comes from the subclass (``homeo_decision.node_runtime.ScenarioNode``).
 """
 
 from __future__ import annotations
 
-import json
 import os
 import signal
 import sys
@@ -14,13 +14,12 @@ from typing import Callable
 import rclpy
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rcl_interfaces.msg import ParameterDescriptor
 from std_msgs.msg import String
 
 from .diagnostics import RejectLog
+from .graph import DIAGNOSTICS, TOPICS
 from .qos import pub_qos, quiet_pub_events, quiet_sub_events, sub_qos
 from .schemas import Message, Rejected, Vocabulary, decode, encode
-from .topics import DIAGNOSTICS, TOPICS
 
 DIAG_PERIOD_S = 1.0
 
@@ -34,10 +33,12 @@ class GatedPublisher:
     an event that must not be lost before its reader matched). Messages wait in order; after
     ``bound_s`` without a match they go out anyway, with a warning."""
 
-    def __init__(self, node: "HomeoNode", topic: str, min_subs: int = 1, bound_s: float = 10.0):
+    def __init__(self, node: "HomeoNode", key: str, min_subs: int = 1, bound_s: float = 10.0):
         self.node = node
-        self.topic = topic
-        self.pub = node.create_publisher(String, topic, pub_qos(topic), event_callbacks=quiet_pub_events())
+        self.key = key
+        self.topic = TOPICS[key].name
+        self.schema = TOPICS[key].schema
+        self.pub = node.create_publisher(String, self.topic, pub_qos(key), event_callbacks=quiet_pub_events())
         self.min_subs = min_subs
         self.bound_s = bound_s
         self.open = min_subs <= 0
@@ -80,17 +81,12 @@ class GatedPublisher:
 
 
 class HomeoNode(Node):
-    """Base of the homeo nodes: parameters ``scenario`` and ``overrides``, the vocabulary,
-    validated JSON subscriptions, and an input-health status on /diagnostics."""
+    """Base of the homeo nodes: validated JSON subscriptions against ``self.voc`` (set by the
+    subclass before it subscribes), gated publishers, and an input-health status on /diagnostics."""
 
     def __init__(self, name: str, **kw):
         super().__init__(name, **kw)
-        self.declare_parameter("scenario", "", ParameterDescriptor(
-            description="scenario JSON file ('' = the thesis scenario); fixed at start", read_only=True))
-        self.declare_parameter("overrides", "{}", ParameterDescriptor(
-            description="JSON object of open-choice overrides, as homeo-sim --set; fixed at start", read_only=True))
-        self.sc = load_node_scenario(self.get_parameter("scenario").value, self.get_parameter("overrides").value)
-        self.voc = Vocabulary(self.sc)
+        self.voc = Vocabulary()
         self.rejects = RejectLog(name)
         from diagnostic_msgs.msg import DiagnosticArray
 
@@ -98,16 +94,17 @@ class HomeoNode(Node):
         self._diag_timer = self.create_timer(DIAG_PERIOD_S, self.publish_diagnostics)
 
     # -- topics ---------------------------------------------------------------------
-    def publisher(self, topic: str, min_subs: int = 0) -> GatedPublisher:
-        return GatedPublisher(self, topic, min_subs)
+    def publisher(self, key: str, min_subs: int = 0) -> GatedPublisher:
+        """A writer of topic ``key`` (of ``graph.TOPICS``)."""
+        return GatedPublisher(self, key, min_subs)
 
     def send(self, pub: GatedPublisher, tick: int, fields: dict, run: int = 0) -> None:
-        pub.publish(encode(TOPICS[pub.topic][0], tick, fields, run=run))
+        pub.publish(encode(pub.schema, tick, fields, run=run))
 
-    def subscribe(self, topic: str, handler: Callable[[Message], None]):
-        """``handler`` gets validated messages; bad ones are dropped with a reason and counted.
-        Handlers raise :class:`Rejected` for messages that are valid alone but not here (stale)."""
-        schema = TOPICS[topic][0]
+    def subscribe(self, key: str, handler: Callable[[Message], None]):
+        """``handler`` gets validated messages of topic ``key``; bad ones are dropped with a reason
+        and counted. Handlers raise :class:`Rejected` for messages valid alone but not here (stale)."""
+        topic, schema = TOPICS[key].name, TOPICS[key].schema
 
         def cb(msg: String) -> None:
             try:
@@ -115,7 +112,7 @@ class HomeoNode(Node):
             except Rejected as exc:
                 self.reject(topic, str(exc))
 
-        return self.create_subscription(String, topic, cb, sub_qos(topic), event_callbacks=quiet_sub_events())
+        return self.create_subscription(String, topic, cb, sub_qos(key), event_callbacks=quiet_sub_events())
 
     def reject(self, topic: str, reason: str) -> None:
         self.rejects.reject(topic, reason)
@@ -140,18 +137,6 @@ class HomeoNode(Node):
         return []
 
 
-def load_node_scenario(path: str, overrides: str):
-    from homeo_decision.scenario import load_scenario
-
-    try:
-        ov = json.loads(overrides or "{}")
-    except json.JSONDecodeError as exc:
-        raise NodeConfigError(f"parameter overrides is not JSON: {exc}") from None
-    if not isinstance(ov, dict):
-        raise NodeConfigError("parameter overrides must be a JSON object")
-    return load_scenario(path or None, overrides=ov)
-
-
 def _die_with_parent() -> None:
     """Nodes started by the launcher end if it is killed outright (no orphans)."""
     ppid = os.environ.get("HOMEO_PARENT_PID")
@@ -170,11 +155,10 @@ def _die_with_parent() -> None:
         pass
 
 
-def run_node(factory: Callable[[], Node], args=None) -> int:
-    """Build the node, spin until Ctrl-C / SIGTERM / shutdown, always destroy it and shut down."""
+def run_node(factory: Callable[[], Node], args=None, config_errors: tuple = ()) -> int:
+    """Build the node, spin until Ctrl-C / SIGTERM / shutdown, always destroy it and shut down.
+    ``config_errors``: more exception types that mean a bad start-up configuration (exit 2)."""
     from rclpy.exceptions import ParameterException
-
-    from homeo_decision.scenario import ScenarioError
 
     _die_with_parent()
     rclpy.init(args=args)  # installs SIGINT/SIGTERM handlers that end spin()
@@ -185,7 +169,7 @@ def run_node(factory: Callable[[], Node], args=None) -> int:
         rclpy.spin(node)  # one SingleThreadedExecutor per process
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
-    except (ScenarioError, NodeConfigError, ParameterException) as exc:  # bad start-up configuration
+    except (NodeConfigError, ParameterException, *config_errors) as exc:  # bad start-up configuration
         print(f"error: {exc}", file=sys.stderr)
         code = 2
     finally:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-from .topics import TOPICS
+from .graph import STATE, TOPICS
 
 # State: the newest value is what matters, and a late joiner gets it (latched).
 STATE_PUB = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE,
@@ -17,12 +17,13 @@ EVENT = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=50, reliability=Reliab
                    durability=DurabilityPolicy.VOLATILE)
 
 
-def pub_qos(topic: str) -> QoSProfile:
-    return STATE_PUB if TOPICS[topic][1] == "state" else EVENT
+def pub_qos(key: str) -> QoSProfile:
+    """The writer QoS of topic ``key`` (of ``graph.TOPICS``)."""
+    return STATE_PUB if TOPICS[key].kind == STATE else EVENT
 
 
-def sub_qos(topic: str) -> QoSProfile:
-    return STATE_SUB if TOPICS[topic][1] == "state" else EVENT
+def sub_qos(key: str) -> QoSProfile:
+    return STATE_SUB if TOPICS[key].kind == STATE else EVENT
 
 
 def quiet_pub_events():

@@ -27,6 +27,7 @@ from homeo_decision.scenario import ScenarioError
 
 from homeo_decision.baselines import POLICIES
 
+from homeo_msgs_py.cli_args import UserError, float_in, int_at_least, Parser, setting
 from homeo_msgs_py.graph import BAYES, INTENTION_MODES, ORACLE
 
 from .runner import RunConfig, build_scenario, run_episode, run_seeds
@@ -36,57 +37,13 @@ from .thesis_values import TABLE_4_5
 PROG = "homeo-sim"
 
 
-class UserError(Exception):
-    """A mistake of the user's: reported in one line, exit code 2."""
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message):  # one line, no usage dump
-        raise UserError(message)
-
-
-def _int_at_least(lo: int):
-    def conv(s: str) -> int:
-        try:
-            v = int(s)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{s!r} is not an integer") from None
-        if v < lo:
-            raise argparse.ArgumentTypeError(f"{v} is below the minimum {lo}")
-        return v
-    return conv
-
-
-def _float_in(lo: float, hi: float):
-    def conv(s: str) -> float:
-        try:
-            v = float(s)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{s!r} is not a number") from None
-        if not (lo <= v <= hi) or math.isnan(v):
-            raise argparse.ArgumentTypeError(f"{v} is outside [{lo}, {hi}]")
-        return v
-    return conv
-
-
-def _setting(s: str) -> tuple[str, object]:
-    if "=" not in s:
-        raise argparse.ArgumentTypeError(f"{s!r} is not KEY=VALUE")
-    k, v = s.split("=", 1)
-    try:
-        val = json.loads(v)
-    except json.JSONDecodeError:
-        val = v
-    return k.strip(), val
-
-
 def add_run_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--iterations", type=_int_at_least(1), default=5000, help="iterations per run (default 5000)")
+    p.add_argument("--iterations", type=int_at_least(1), default=5000, help="iterations per run (default 5000)")
     g = p.add_mutually_exclusive_group()
-    g.add_argument("--seed", type=_int_at_least(0), default=None, help="one run with this seed (default 0)")
-    g.add_argument("--seeds", type=_int_at_least(1), default=None, help="runs with seeds 0..K-1 on all cores")
-    p.add_argument("--dod", type=_float_in(0.0, 1.0), default=None, help="Degree of Dedication in [0, 1] (Eq 3.27)")
-    p.add_argument("--xi", type=_float_in(0.0, 1e6), default=None, help="motivation factor xi >= 0 (Eq 3.20)")
+    g.add_argument("--seed", type=int_at_least(0), default=None, help="one run with this seed (default 0)")
+    g.add_argument("--seeds", type=int_at_least(1), default=None, help="runs with seeds 0..K-1 on all cores")
+    p.add_argument("--dod", type=float_in(0.0, 1.0), default=None, help="Degree of Dedication in [0, 1] (Eq 3.27)")
+    p.add_argument("--xi", type=float_in(0.0, 1e6), default=None, help="motivation factor xi >= 0 (Eq 3.20)")
     p.add_argument("--no-pseudo", action="store_true", help="switch off pseudo updates (Eq 3.23)")
     add_common_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
@@ -95,15 +52,15 @@ def add_run_arguments(p: argparse.ArgumentParser) -> None:
 def add_common_arguments(p: argparse.ArgumentParser) -> None:
     """Scenario, open-choice overrides, worker count and progress: shared by run, sweep and report."""
     p.add_argument("--scenario", metavar="FILE", default=None, help="scenario JSON (default: the thesis scenario)")
-    p.add_argument("--set", metavar="KEY=VALUE", type=_setting, action="append", default=[],
+    p.add_argument("--set", metavar="KEY=VALUE", type=setting, action="append", default=[],
                    help="override an open choice of the scenario, e.g. --set human_no_intention_prob=0.5")
-    p.add_argument("--workers", type=_int_at_least(1), default=None, help="processes (default: all cores)")
+    p.add_argument("--workers", type=int_at_least(1), default=None, help="processes (default: all cores)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
 def build_parser() -> argparse.ArgumentParser:
-    ap = _Parser(prog=PROG, description="Homeostatic Object-Q robot: the thesis simulation (Section 4.2).")
-    sub = ap.add_subparsers(dest="cmd", required=True, parser_class=_Parser)
+    ap = Parser(prog=PROG, description="Homeostatic Object-Q robot: the thesis simulation (Section 4.2).")
+    sub = ap.add_subparsers(dest="cmd", required=True, parser_class=Parser)
     run = sub.add_parser("run", help="run the simulation and print Table 4.5's metrics")
     add_run_arguments(run)
     run.add_argument("--save-q", metavar="FILE", help="save the learned Q-table (with --seeds: FILE per seed)")
@@ -121,18 +78,18 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--load-intention", metavar="FILE", help="bayes: start from a saved intention model")
     sw = sub.add_parser("sweep", help="sweep xi (Fig 4.3), DoD (Fig 4.5) or the pseudo update (Fig 4.4)")
     sw.add_argument("param", choices=("xi", "dod", "pseudo"), help="the parameter to sweep")
-    sw.add_argument("--seeds", type=_int_at_least(1), default=10, help="seeds 0..K-1 per point (default 10)")
-    sw.add_argument("--iterations", type=_int_at_least(1), default=5000, help="iterations per run (default 5000)")
+    sw.add_argument("--seeds", type=int_at_least(1), default=10, help="seeds 0..K-1 per point (default 10)")
+    sw.add_argument("--iterations", type=int_at_least(1), default=5000, help="iterations per run (default 5000)")
     sw.add_argument("--out", metavar="DIR", help="also write sweep-PARAM.json and the figure into DIR")
     add_common_arguments(sw)
     sw.add_argument("--json", action="store_true", help='print {"param", "points": [{"value", "metrics"}]}')
     rp = sub.add_parser("report", help="every table and figure of Section 4.2, baselines and adaptive DoD")
     rp.add_argument("--out", metavar="DIR", required=True, help="directory for the PNGs, report.md and results.json")
-    rp.add_argument("--seeds", type=_int_at_least(2), default=10, help="seeds 0..K-1 per configuration (default 10)")
-    rp.add_argument("--iterations", type=_int_at_least(10), default=5000, help="iterations per run (default 5000)")
+    rp.add_argument("--seeds", type=int_at_least(2), default=10, help="seeds 0..K-1 per configuration (default 10)")
+    rp.add_argument("--iterations", type=int_at_least(10), default=5000, help="iterations per run (default 5000)")
     add_common_arguments(rp)
     b = sub.add_parser("bench", help="iterations per second (one core) and the 20-seed wall time")
-    b.add_argument("--iterations", type=_int_at_least(100), default=20000, help="iterations of the single-core run")
+    b.add_argument("--iterations", type=int_at_least(100), default=20000, help="iterations of the single-core run")
     b.add_argument("--intention", choices=INTENTION_MODES, default=ORACLE,
                    help="bayes: also time the recogniser (one recognition, its share of learning) and the "
                         "bayes-mode iteration against the oracle one")
@@ -309,7 +266,7 @@ def cmd_bench(args) -> int:
     from homeo_decision.scenario import load_scenario
 
     if args.intention == BAYES:
-        from homeo_intention.bench import bench_intention, format_bench
+        from .intention_bench import bench_intention, format_bench
 
         res = bench_intention(args.iterations)
         print(json.dumps(res) if args.json else format_bench(res))

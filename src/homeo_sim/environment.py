@@ -22,17 +22,19 @@ class SimEnvironment:
     ``cues``: draw what the robot sees of the human (gesture, movement, keyword: the scenario's
     ``observations``) in every observation; they come from the human's own "observation" stream,
     so drawing them or not leaves everything else unchanged. The true intention is always in the
-    observation (an oracle reads it; a recogniser ignores it)."""
+    observation (an oracle reads it; a recogniser ignores it). ``body_after``: report the body
+    right after each action in the outcome (default: when the scenario's open choices need it)."""
 
-    def __init__(self, sc: Scenario, seed: int = 0, cues: bool = False):
+    def __init__(self, sc: Scenario, seed: int = 0, cues: bool = False, body_after: bool | None = None):
         self.sc = sc
         self.world = World(sc)
         self.human = SimHuman(sc, seed)
         self.body = SimBody(sc)
         self.cues = cues and sc.observations is not None
         self._unseen = [w[0] for w in sc.c.with_intention]  # the world code with the intention `none`
-        # the body right after the action is needed by these two open choices only
-        self.keep_after = sc.open["reward_span"] == "action" or sc.open["metrics_sample"] == "after_action"
+        # report the body right after the action (in-process only these two open choices need it)
+        self.keep_after = body_after if body_after is not None else (
+            sc.open["reward_span"] == "action" or sc.open["metrics_sample"] == "after_action")
         self._start(seed)
 
     @property

@@ -34,13 +34,10 @@ class _Timed:
         self.n_learn += 1
         return n
 
-    @property
-    def needs_truth(self):
-        return self.model.needs_truth
 
 
 def _best_rate(cfg, sc, repeats: int) -> float:
-    from homeo_sim.runner import run_episode
+    from .runner import run_episode
 
     best = float("inf")
     for _ in range(repeats):
@@ -52,22 +49,24 @@ def _best_rate(cfg, sc, repeats: int) -> float:
 
 def bench_intention(iterations: int = 20000, repeats: int = 3) -> dict:
     from homeo_decision.scenario import load_scenario
-    from homeo_sim.runner import RunConfig, Simulation
+    from homeo_msgs_py.graph import BAYES
+
+    from .runner import RunConfig, Simulation
 
     sc = load_scenario()
     oracle_ips = _best_rate(RunConfig(iterations=iterations), sc, repeats)
-    bayes_ips = _best_rate(RunConfig(iterations=iterations, intention="bayes"), sc, repeats)
+    bayes_ips = _best_rate(RunConfig(iterations=iterations, intention=BAYES), sc, repeats)
 
     # recognise / learn shares inside one bayes episode
-    sim = Simulation(sc, RunConfig(iterations=iterations, intention="bayes"))
-    timed = _Timed(sim.model)
-    sim.model = timed
+    sim = Simulation(sc, RunConfig(iterations=iterations, intention=BAYES))
+    timed = _Timed(sim.recognition.model)
+    sim.recognition.model = timed
     sim.run(iterations)
     model = timed.model
     em_us = timed.t_learn / max(model.em_runs, 1) * 1e6
 
     # one recognition in isolation, on the observations of that episode's human
-    obs = [sim.human.observe() for _ in range(2000)]
+    obs = [sim.env.human.observe() for _ in range(2000)]
     best = float("inf")
     for _ in range(repeats):
         t0 = time.perf_counter()

@@ -15,7 +15,9 @@ import json
 import sys
 import time
 
-from .launch import GraphError, SimOptions, run_graph
+from homeo_msgs_py.graph import ORACLE
+
+from .sim import GraphError, SimOptions, run_graph
 from .processes import Graph, NodeSpec, graph_env
 
 HOPS = 6  # publish-receive hops per tick in the graph (see above)
@@ -24,7 +26,7 @@ CRITICAL_HOPS = 4
 
 def floor_s_per_tick(iterations: int, hops: int = HOPS, bound_s: float = 120.0) -> float:
     # each process declares node name homeo_floor: renamed so that its parameters file applies
-    specs = [NodeSpec(f"homeo_floor_{i}", "homeo_msgs_py.floor_chain",
+    specs = [NodeSpec(f"homeo_floor_{i}", "homeo_launch.floor_chain",
                       {"index": i, "hops": hops, "iterations": iterations},
                       args=["--ros-args", "-r", f"__node:=homeo_floor_{i}"]) for i in range(hops)]
     graph = Graph(specs, graph_env())
@@ -57,7 +59,7 @@ def cmd_bench(args) -> int:
     for r in range(args.rounds):
         st = run_graph(SimOptions(iterations=args.iterations), quiet=True)
         graph.append(st["elapsed_s"] / args.iterations)
-        oracle.append(run_graph(SimOptions(iterations=args.iterations, intention="oracle"),
+        oracle.append(run_graph(SimOptions(iterations=args.iterations, intention=ORACLE),
                                 quiet=True)["elapsed_s"] / args.iterations)
         rss.append(st["rss_mb"])
         missed += st["missed"]

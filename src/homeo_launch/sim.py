@@ -23,20 +23,15 @@ from dataclasses import dataclass
 
 from homeo_decision.qtable_io import QTableError
 from homeo_decision.scenario import ScenarioError
-from homeo_msgs_py.topics import ACTION, DRIVES, INTENTION, OBSERVATION, OUTCOME, RUN_STATUS, SIM_NODES, WORLD
+from homeo_msgs_py.cli_args import Parser, UserError, float_in, int_at_least, setting
+from homeo_msgs_py.graph import BAYES, GRAPHS, INTENTION_MODES, NODES, ORACLE, TOPICS, endpoints
+from homeo_sim.cli import format_table, run_output
+from homeo_sim.stats import json_safe
 
-from .cli import UserError, _float_in, _int_at_least, _Parser, _setting, format_table
 from .processes import Graph, NodeSpec, dds_defaults, graph_env
-from .cli import run_output
-from .stats import json_safe
 
 PROG = "homeo-launch"
 DISCOVERY_TIMEOUT_S = 60.0
-# (writers, readers) each topic has in the simulated graph
-EXPECTED_ENDPOINTS = {WORLD: (1, 1), OBSERVATION: (1, 1), INTENTION: (1, 1), DRIVES: (1, 1), ACTION: (1, 1),
-                      OUTCOME: (1, 1)}
-MODULES = {"homeo_sim": "homeo_sim.node", "homeo_intention": "homeo_intention.node",
-           "homeo_drives": "homeo_decision.drives_node", "homeo_decision": "homeo_decision.node"}
 
 
 class GraphError(Exception):
@@ -57,7 +52,7 @@ class SimOptions:
     save_q: str | None = None
     trace: str | None = None
     action_timeout: float = 5.0
-    intention: str = "bayes"  # the graph recognises intentions; "oracle" is the thesis's simulation
+    intention: str = BAYES  # the graph recognises intentions; ORACLE is the thesis's simulation
 
 
 def sim_specs(o: SimOptions) -> list[NodeSpec]:
@@ -73,14 +68,12 @@ def sim_specs(o: SimOptions) -> list[NodeSpec]:
         decision["q_table_path"] = os.path.abspath(q_path)
     if o.load_q:
         decision["load_on_start"] = True
-    bayes = o.intention == "bayes"
     sim = dict(common, seed=o.seed, iterations=o.iterations, rate=float(o.rate),
                action_timeout=float(o.action_timeout), trace_path=os.path.abspath(o.trace) if o.trace else "",
-               intention_accuracy=bayes, outcome_readers=2 if bayes else 1)
-    return [NodeSpec("homeo_sim", MODULES["homeo_sim"], sim),
-            NodeSpec("homeo_intention", MODULES["homeo_intention"], dict(common, mode=o.intention)),
-            NodeSpec("homeo_drives", MODULES["homeo_drives"], dict(common)),
-            NodeSpec("homeo_decision", MODULES["homeo_decision"], decision)]
+               intention_accuracy=o.intention == BAYES)
+    params = {"homeo_sim": sim, "homeo_intention": dict(common, mode=o.intention), "homeo_drives": dict(common),
+              "homeo_decision": decision}
+    return [NodeSpec(n, NODES[n].module, params[n]) for n in GRAPHS["sim"]]
 
 
 class Monitor:
@@ -106,7 +99,7 @@ class Monitor:
             except Rejected:
                 pass
 
-        self.node.create_subscription(String, RUN_STATUS, on_status, sub_qos(RUN_STATUS))
+        self.node.create_subscription(String, TOPICS["run_status"].name, on_status, sub_qos("run_status"))
 
     def spin(self, timeout: float = 0.05) -> None:
         self.rclpy.spin_once(self.node, timeout_sec=timeout)
@@ -114,7 +107,8 @@ class Monitor:
     def missing(self, nodes, endpoints) -> list[str]:
         present = set(self.node.get_node_names())
         out = [f"node {n}" for n in nodes if n not in present]
-        for topic, (w, r) in endpoints.items():
+        for key, (w, r) in endpoints.items():
+            topic = TOPICS[key].name
             nw, nr = self.node.count_publishers(topic), self.node.count_subscribers(topic)
             if nw < w:
                 out.append(f"{topic}: {nw}/{w} writers")
@@ -143,13 +137,6 @@ class Monitor:
     def close(self) -> None:
         self.node.destroy_node()
         self.rclpy.try_shutdown()
-
-
-def expected_endpoints(o: SimOptions) -> dict:
-    out = dict(EXPECTED_ENDPOINTS)
-    if o.intention == "bayes":
-        out[OUTCOME] = (1, 2)  # the recogniser learns from the outcome too
-    return out
 
 
 def wait_until_up(graph: Graph, mon: Monitor, nodes, endpoints, bound: float) -> None:
@@ -183,7 +170,7 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
     try:
         graph.start()
         mon = Monitor()
-        wait_until_up(graph, mon, SIM_NODES, expected_endpoints(o), discovery_timeout)
+        wait_until_up(graph, mon, GRAPHS["sim"], endpoints("sim", o.intention == BAYES), discovery_timeout)
         t_start = None
         last_tick = -1
         while True:
@@ -247,35 +234,35 @@ def _set_param(mon: Monitor, node: str, name: str, value) -> tuple[bool, str]:
 
 # -- command line -----------------------------------------------------------------------------
 def build_parser() -> argparse.ArgumentParser:
-    ap = _Parser(prog=PROG, description="Start the homeostatic robot's ROS 2 node graph.")
-    sub = ap.add_subparsers(dest="cmd", required=True, parser_class=_Parser)
+    ap = Parser(prog=PROG, description="Start the homeostatic robot's ROS 2 node graph.")
+    sub = ap.add_subparsers(dest="cmd", required=True, parser_class=Parser)
     s = sub.add_parser("sim", help="the graph with the simulated world and human; prints Table 4.5's metrics")
-    s.add_argument("--iterations", type=_int_at_least(0), default=5000, help="ticks (0 = until Ctrl-C; default 5000)")
-    s.add_argument("--rate", type=_float_in(0.0, 1000.0), default=0.0, help="ticks per second (0 = as fast as lockstep allows)")
-    s.add_argument("--seed", type=_int_at_least(0), default=0, help="seed of every component (default 0)")
-    s.add_argument("--dod", type=_float_in(0.0, 1.0), default=None, help="Degree of Dedication (Eq 3.27)")
-    s.add_argument("--xi", type=_float_in(0.0, 1000.0), default=None, help="motivation factor xi (Eq 3.20)")
+    s.add_argument("--iterations", type=int_at_least(0), default=5000, help="ticks (0 = until Ctrl-C; default 5000)")
+    s.add_argument("--rate", type=float_in(0.0, 1000.0), default=0.0, help="ticks per second (0 = as fast as lockstep allows)")
+    s.add_argument("--seed", type=int_at_least(0), default=0, help="seed of every component (default 0)")
+    s.add_argument("--dod", type=float_in(0.0, 1.0), default=None, help="Degree of Dedication (Eq 3.27)")
+    s.add_argument("--xi", type=float_in(0.0, 1000.0), default=None, help="motivation factor xi (Eq 3.20)")
     s.add_argument("--no-pseudo", action="store_true", help="switch off pseudo updates (Eq 3.23)")
-    s.add_argument("--intention", choices=("bayes", "oracle"), default="bayes",
+    s.add_argument("--intention", choices=INTENTION_MODES, default=BAYES,
                    help="recognise the intention with the Bayesian network (default) or observe it (the thesis's "
                         "simulation; what homeo-sim run does by default)")
     s.add_argument("--scenario", metavar="FILE", default=None, help="scenario JSON (default: the thesis scenario)")
-    s.add_argument("--set", metavar="KEY=VALUE", type=_setting, action="append", default=[],
+    s.add_argument("--set", metavar="KEY=VALUE", type=setting, action="append", default=[],
                    help="override an open choice of the scenario")
     s.add_argument("--load-q", metavar="FILE", help="start from a saved Q-table")
     s.add_argument("--save-q", metavar="FILE", help="save the Q-table at the end")
     s.add_argument("--trace", metavar="FILE", help="the simulation writes one JSON line per tick")
-    s.add_argument("--action-timeout", type=_float_in(0.01, 3600.0), default=5.0,
+    s.add_argument("--action-timeout", type=float_in(0.01, 3600.0), default=5.0,
                    help="seconds to wait for an action before the tick counts as none (default 5)")
     s.add_argument("--log-dir", metavar="DIR", help="keep each node's log here (default: a temporary directory)")
     s.add_argument("--json", action="store_true", help="print the metrics as homeo-sim run --json does")
     s.add_argument("--quiet", action="store_true", help="no progress bar")
-    from pepper_bridge.launch_pepper import add_parser as add_pepper
+    from .pepper import add_parser as add_pepper
 
     add_pepper(sub)
     b = sub.add_parser("bench", help="seconds per tick of the graph against a raw rclpy chain (the floor)")
-    b.add_argument("--iterations", type=_int_at_least(10), default=1000, help="ticks of each (default 1000)")
-    b.add_argument("--rounds", type=_int_at_least(1), default=3, help="alternating graph/floor pairs (default 3)")
+    b.add_argument("--iterations", type=int_at_least(10), default=1000, help="ticks of each (default 1000)")
+    b.add_argument("--rounds", type=int_at_least(1), default=3, help="alternating graph/floor pairs (default 3)")
     b.add_argument("--json", action="store_true")
     return ap
 
@@ -357,10 +344,10 @@ def main(argv=None) -> int:
         if args.cmd == "sim":
             return cmd_sim(args)
         if args.cmd == "pepper":
-            from pepper_bridge.launch_pepper import cmd_pepper
+            from .pepper import cmd_pepper
 
             return cmd_pepper(args)
-        from .graph_bench import cmd_bench
+        from .bench import cmd_bench
 
         return cmd_bench(args)
     except (UserError, ScenarioError, QTableError) as exc:

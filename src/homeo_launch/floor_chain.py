@@ -15,8 +15,8 @@ import time
 from rclpy.node import Node
 from std_msgs.msg import String
 
-from .node_base import run_node
-from .qos import EVENT, quiet_pub_events, quiet_sub_events
+from homeo_msgs_py.node_base import run_node
+from homeo_msgs_py.qos import EVENT, quiet_pub_events, quiet_sub_events
 
 PAYLOAD = "x" * 300  # about the size of a homeo message
 

@@ -22,19 +22,19 @@ import os
 import sys
 import time
 
-from .schemas import SCHEMAS, VERSION, Rejected, Vocabulary, decode, validate
-from .topics import DIAGNOSTICS, TOPICS
+from homeo_decision.codec import vocabulary
+from homeo_msgs_py.cli_args import Parser, UserError
+from homeo_msgs_py.graph import DIAGNOSTICS, TOPICS, key_of
+from homeo_msgs_py.schemas import SCHEMAS, VERSION, Rejected, Vocabulary, decode, validate
 
 PROG = "homeo-topic"
 
 
-class UserError(Exception):
-    pass
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message):
-        raise UserError(message)
+def _key(topic: str) -> str:
+    key = key_of(topic)
+    if key is None:
+        raise UserError(f"{topic} is not a homeo topic; known: {', '.join(t.name for t in TOPICS.values())}")
+    return key
 
 
 def _vocabulary(args) -> Vocabulary:
@@ -49,7 +49,7 @@ def _vocabulary(args) -> Vocabulary:
             overrides[k] = json.loads(v)
         except json.JSONDecodeError:
             overrides[k] = v
-    return Vocabulary(load_scenario(args.scenario, overrides=overrides))
+    return vocabulary(load_scenario(args.scenario, overrides=overrides))
 
 
 class _Ros:
@@ -57,7 +57,7 @@ class _Ros:
         import rclpy
         from rclpy.signals import SignalHandlerOptions
 
-        from homeo_sim.processes import dds_defaults
+        from .processes import dds_defaults
 
         os.environ.update(dds_defaults())
         rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
@@ -94,7 +94,8 @@ def cmd_list(args) -> int:
             subs = [i.node_name for i in n.get_subscriptions_info_by_topic(name) if i.node_name != me]
             if not pubs and not subs:
                 continue
-            schema = f"  [{TOPICS[name][0]}]" if name in TOPICS else ""
+            key = key_of(name)
+            schema = f"  [{TOPICS[key].schema}]" if key else ""
             print(f"  {name}  {', '.join(types)}{schema}")
             print(f"      writers: {', '.join(pubs) or '-'}   readers: {', '.join(subs) or '-'}")
     finally:
@@ -122,12 +123,13 @@ def cmd_echo(args) -> int:
                 print(json.dumps(_diag_text(msg), indent=None if args.compact else 2), flush=True)
 
             ros.node.create_subscription(DiagnosticArray, DIAGNOSTICS, on_diag, 10)
-        elif args.topic in TOPICS:
+        else:
             from std_msgs.msg import String
 
-            from .qos import sub_qos
+            from homeo_msgs_py.qos import sub_qos
 
-            schema = TOPICS[args.topic][0]
+            key = _key(args.topic)
+            schema = TOPICS[key].schema
 
             def on_msg(msg):
                 seen[0] += 1
@@ -144,9 +146,7 @@ def cmd_echo(args) -> int:
                     print(f"# invalid: {note}", flush=True)
                 print(text, flush=True)
 
-            ros.node.create_subscription(String, args.topic, on_msg, sub_qos(args.topic))
-        else:
-            raise UserError(f"{args.topic} is not a homeo topic; known: {', '.join([*TOPICS, DIAGNOSTICS])}")
+            ros.node.create_subscription(String, TOPICS[key].name, on_msg, sub_qos(key))
         end = time.monotonic() + args.timeout if args.timeout else None
         while (not args.count or seen[0] < args.count) and (end is None or time.monotonic() < end):
             ros.rclpy.spin_once(ros.node, timeout_sec=0.1)
@@ -160,24 +160,23 @@ def cmd_echo(args) -> int:
 
 def build_message(topic: str, text: str, voc: Vocabulary) -> str:
     """The JSON to publish: envelope filled in, then validated as the nodes will."""
-    if topic not in TOPICS:
-        raise UserError(f"{topic} is not a homeo topic; known: {', '.join(TOPICS)}")
+    schema = TOPICS[_key(topic)].schema
     try:
         obj = json.loads(text)
     except json.JSONDecodeError as exc:
         raise UserError(f"the message is not JSON: {exc.msg} at column {exc.colno}") from None
     if not isinstance(obj, dict):
         raise UserError("the message must be a JSON object")
-    obj.setdefault("schema", TOPICS[topic][0])
+    obj.setdefault("schema", schema)
     obj.setdefault("version", VERSION)
     obj.setdefault("run", 0)
     obj.setdefault("tick", 0)
     obj.setdefault("stamp", time.time())
     try:
-        validate(obj, voc, TOPICS[topic][0])
+        validate(obj, voc, schema)
     except Rejected as exc:
-        fields = ", ".join(SCHEMAS[TOPICS[topic][0]])
-        raise UserError(f"{topic} would drop this message: {exc} (fields of {TOPICS[topic][0]}: {fields})") from None
+        fields = ", ".join(SCHEMAS[schema])
+        raise UserError(f"{topic} would drop this message: {exc} (fields of {schema}: {fields})") from None
     return json.dumps(obj)
 
 
@@ -186,11 +185,12 @@ def cmd_pub(args) -> int:
     text = build_message(args.topic, args.json, voc)
     from std_msgs.msg import String
 
-    from .qos import pub_qos
+    from homeo_msgs_py.qos import pub_qos
 
+    key = _key(args.topic)
     ros = _Ros()
     try:
-        pub = ros.node.create_publisher(String, args.topic, pub_qos(args.topic))
+        pub = ros.node.create_publisher(String, TOPICS[key].name, pub_qos(key))
         if not ros.spin_for(args.wait, lambda: pub.get_subscription_count() > 0):
             print(f"{PROG}: note: no reader of {args.topic} matched within {args.wait:g} s; publishing anyway",
                   file=sys.stderr)
@@ -261,8 +261,8 @@ def cmd_call(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    ap = _Parser(prog=PROG, description="Inspect the homeo graph (no ros2 CLI needed).")
-    sub = ap.add_subparsers(dest="cmd", required=True, parser_class=_Parser)
+    ap = Parser(prog=PROG, description="Inspect the homeo graph (no ros2 CLI needed).")
+    sub = ap.add_subparsers(dest="cmd", required=True, parser_class=Parser)
 
     def scen(p):
         p.add_argument("--scenario", metavar="FILE", default=None, help="scenario JSON (default: the thesis)")

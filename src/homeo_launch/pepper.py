@@ -37,21 +37,21 @@ import threading
 import time
 from pathlib import Path
 
-from homeo_msgs_py.topics import ACTION, DRIVES, INTENTION, OBSERVATION, OUTCOME, WORLD
-from homeo_sim.cli import UserError, _float_in, _int_at_least
-from homeo_sim.launch import DISCOVERY_TIMEOUT_S, MODULES, PROG, GraphError, Monitor, check_alive, wait_until_up
-from homeo_sim.processes import Graph, NodeSpec, dds_defaults, graph_env
+from homeo_msgs_py import graph as G
+from homeo_msgs_py.cli_args import UserError, float_in, int_at_least
 
-BRIDGE_NODES = ("pepper_bridge", "homeo_intention", "homeo_drives", "homeo_decision")
+from .processes import Graph, NodeSpec, dds_defaults, graph_env
+from .sim import DISCOVERY_TIMEOUT_S, PROG, GraphError, Monitor, check_alive, wait_until_up
+
+BRIDGE_NODES = G.GRAPHS["pepper"]
 STANDIN_START_S = 30.0
 FIELD_DODS = (("dedicated", 0.25), ("selfish", 0.0))
-INTENTION_MODES = {"cues": "oracle", "bayes": "bayes"}  # --intention -> the intention node's mode
+INTENTION_MODES = {"cues": G.ORACLE, "bayes": G.BAYES}  # --intention -> the intention node's mode
 
 
 def endpoints(intention: str) -> dict:
     """(writers, readers) per topic of the bridge graph; the Bayesian recogniser reads the outcome too."""
-    return {WORLD: (1, 1), OBSERVATION: (1, 1), INTENTION: (1, 1), DRIVES: (1, 1), ACTION: (1, 1),
-            OUTCOME: (1, 2 if intention == "bayes" else 1)}
+    return G.endpoints("pepper", INTENTION_MODES[intention] == G.BAYES)
 
 
 # -- the stand-in robot as its own process ------------------------------------------------------
@@ -180,11 +180,10 @@ def pepper_specs(*, url: str, scenario: str, overrides: dict, seed: int, dod: fl
     bridge = dict(common, qi_url=url, user=user, password=password, config=os.path.abspath(config) if config else "",
                   interactions=interactions, collect_window=float(collect_window), collect_quiet=float(collect_quiet),
                   action_timeout=float(action_timeout), end_with_script=end_with_script,
-                  intention_cues=intention == "cues", outcome_readers=endpoints(intention)[OUTCOME][1])
-    return [NodeSpec("pepper_bridge", "pepper_bridge.node", bridge),
-            NodeSpec("homeo_intention", MODULES["homeo_intention"], dict(common, mode=INTENTION_MODES[intention])),
-            NodeSpec("homeo_drives", MODULES["homeo_drives"], dict(common)),
-            NodeSpec("homeo_decision", MODULES["homeo_decision"], decision)]
+                  intention_cues=intention == "cues", outcome_readers=endpoints(intention)["outcome"][1])
+    params = {"pepper_bridge": bridge, "homeo_intention": dict(common, mode=INTENTION_MODES[intention]),
+              "homeo_drives": dict(common), "homeo_decision": decision}
+    return [NodeSpec(n, G.NODES[n].module, params[n]) for n in BRIDGE_NODES]
 
 
 def run_pepper_graph(specs: list[NodeSpec], log_dir: Path, standin: StandinProcess | None = None, on_row=None,
@@ -315,21 +314,21 @@ def add_parser(subparsers) -> None:
     p.add_argument("--scenario", metavar="FILE", help="scenario JSON (default: the thesis scenario)")
     p.add_argument("--q-table", metavar="FILE", help="the decision node loads this Q-table at start "
                    "(with --field: one table for both robots)")
-    p.add_argument("--dod", type=_float_in(0.0, 1.0), default=None, help="Degree of Dedication (Eq 3.27)")
+    p.add_argument("--dod", type=float_in(0.0, 1.0), default=None, help="Degree of Dedication (Eq 3.27)")
     p.add_argument("--intention", choices=("cues", "bayes"), default="cues",
                    help="cues (default): the config's keyword/gesture cues name the intention (the intention node in "
                         "oracle mode; as homeo-pepper-field); bayes: the Bayesian recogniser on the raw cues")
-    p.add_argument("--interactions", type=_int_at_least(0), default=0,
+    p.add_argument("--interactions", type=int_at_least(0), default=0,
                    help="interactions (0 = until the script ends, or Ctrl-C on a robot)")
-    p.add_argument("--seed", type=_int_at_least(0), default=0, help="seed of the decision node and the stand-in")
-    p.add_argument("--time-scale", type=_float_in(0.0, 1000.0), default=0.0,
+    p.add_argument("--seed", type=int_at_least(0), default=0, help="seed of the decision node and the stand-in")
+    p.add_argument("--time-scale", type=float_in(0.0, 1000.0), default=0.0,
                    help="stand-in: simulated seconds per wall second (default 0: each action lasts 10 s, reproducible)")
-    p.add_argument("--collect-window", type=_float_in(0.0, 600.0), default=None,
+    p.add_argument("--collect-window", type=float_in(0.0, 600.0), default=None,
                    help="longest wait for the user's reaction, s (default 3 with the stand-in, 8 on a robot)")
-    p.add_argument("--collect-quiet", type=_float_in(0.0, 600.0), default=None,
+    p.add_argument("--collect-quiet", type=float_in(0.0, 600.0), default=None,
                    help="a gap without events that ends the wait, s (default 0.15 with the stand-in; on a robot the "
                         "whole window)")
-    p.add_argument("--action-timeout", type=_float_in(0.01, 3600.0), default=5.0,
+    p.add_argument("--action-timeout", type=float_in(0.01, 3600.0), default=5.0,
                    help="seconds to wait for the decision before an interaction counts as none (default 5)")
     p.add_argument("--fresh-schedule", action="store_true", help="with a Q-table: start the learning schedule over "
                    "(default: continue in its last phase)")
