@@ -39,7 +39,7 @@ class DriveTracker:
             if body_after is not None:
                 m.set_body(body_vector(self.sc, body_after))
             self.after_action = tuple(m.values)
-        m.apply_time(expressed, satisfied)  # Table 4.2, with the open choice nach_growth
+        m.apply_time(expressed, satisfied)  # Table 4.2, with the open choice serving_growth
 
     def perceive(self, body: dict, code: int) -> dict:
         """Fields of ``homeo/drives`` for the perceived world ``code`` and the body of this tick."""

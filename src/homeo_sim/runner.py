@@ -184,7 +184,7 @@ class Simulation:
                 drives.set_body(body.values)
                 after_action = tuple(drives.values)
             body.apply_time()
-            # the robot's NAch grows while it believes an intention is pending (Table 4.2, open `nach_growth`)
+            # the robot's NAch grows while it believes an intention is pending (Table 4.2, open `serving_growth`)
             drives.apply_time(r.intention != 0 or resp.feedback != 0, resp.satisfied)
             drives.set_body(body.values)
             human.advance(world.code)
