@@ -83,8 +83,8 @@ def test_rule_hand_checked_choices(thesis, where, kw, d, expected):
     assert a in thesis.c.valid[code]
 
 
-def test_rule_refuses_a_scenario_it_was_not_written_for(toy):
-    with pytest.raises(ValueError, match="thesis scenario"):
+def test_rule_needs_the_scenarios_rule_policy_block(toy):
+    with pytest.raises(ValueError, match="no 'rule_policy' block"):
         RulePolicy(toy)
 
 

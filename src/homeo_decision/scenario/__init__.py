@@ -5,7 +5,7 @@ into per-world-code lookup tables; ``rule_policy`` and ``reference`` validate th
 blocks of the rule baseline and of published numbers. Import from here.
 """
 
-from .compile import _compile, _holds
+from .compile import _compile, _holds, holds
 from .load import ANY_ACTION, OPEN_CHOICES, load_scenario, scenario_from_dict
 from .model import (DISTANCES, NONE_INTENTION, NULL_OBJECT, OBS_CHANNELS, PRESENCE, RELATIONS, SCHEMA,
                     SCHEMA_VERSION, ActionSpec, Compiled, DriveSpec, IntentionSpec, ObservationSpec, ReferenceSpec,
@@ -15,5 +15,5 @@ __all__ = [
     "ANY_ACTION", "DISTANCES", "NONE_INTENTION", "NULL_OBJECT", "OBS_CHANNELS", "OPEN_CHOICES", "PRESENCE",
     "RELATIONS", "SCHEMA", "SCHEMA_VERSION", "ActionSpec", "Compiled", "DriveSpec", "IntentionSpec",
     "ObservationSpec", "ReferenceSpec", "RuleCandidate", "RuleSpec", "Scenario", "ScenarioError", "_compile",
-    "_holds", "load_scenario", "scenario_from_dict",
+    "_holds", "holds", "load_scenario", "scenario_from_dict",
 ]

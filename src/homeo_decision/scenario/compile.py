@@ -17,7 +17,8 @@ if TYPE_CHECKING:
     from .model import Scenario
 
 
-def _holds(cond: Mapping[str, list], view: Mapping[str, str]) -> bool:
+def holds(cond: Mapping[str, list], view: Mapping[str, str]) -> bool:
+    """Whether a condition ``{variable: [values]}`` holds in a view (``"!x"``: anything but x)."""
     for var, vals in cond.items():
         v = view[var]
         pos = [x for x in vals if not x.startswith("!")]
@@ -27,6 +28,9 @@ def _holds(cond: Mapping[str, list], view: Mapping[str, str]) -> bool:
         if v in neg:
             return False
     return True
+
+
+_holds = holds  # the older, private name
 
 
 def _compile(sc: Scenario) -> None:

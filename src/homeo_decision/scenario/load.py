@@ -51,12 +51,15 @@ OPEN_CHOICES: dict[str, tuple[Any, Any]] = {
 
 
 def load_scenario(path: str | Path | None = None, overrides: Mapping[str, Any] | None = None) -> Scenario:
-    """Load, validate and compile a scenario file (the thesis scenario by default)."""
-    if path is None:
-        from homeo_decision.scenarios import default_scenario_path
+    """Load, validate and compile a scenario file (the thesis scenario by default; a bare name such as
+    ``workshop`` is a file shipped in ``homeo_decision/scenarios``)."""
+    from homeo_decision.scenarios import SCENARIO_DIR, default_scenario_path
 
+    if path is None:
         path = default_scenario_path()
     p = Path(path)
+    if not p.exists() and p.name == str(path) and not p.suffix and (SCENARIO_DIR / f"{p}.json").is_file():
+        p = SCENARIO_DIR / f"{p}.json"  # a bare name: a scenario shipped with the package
     try:
         text = p.read_text()
     except FileNotFoundError:
