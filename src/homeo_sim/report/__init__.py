@@ -16,11 +16,11 @@ from pathlib import Path
 
 from ..runner import RunConfig, cached_scenario
 from ..sweep import explicit, n_jobs, progress_bar, run_jobs, summarize_point
-from .analysis import _analyse, _jsonable, baselines_for, report_configs
+from .analysis import _analyse, _jsonable, baselines_for, report_configs  # noqa: F401 (re-exported)
 from .figures import _figures, fig_dod, fig_pseudo, fig_xi
 from .markdown import _markdown
 
-__all__ = ["build_report", "fig_dod", "fig_pseudo", "fig_xi", "report_configs"]
+__all__ = ["baselines_for", "build_report", "fig_dod", "fig_pseudo", "fig_xi", "report_configs"]
 
 def build_report(out_dir: str | Path, seeds: int = 10, iterations: int = 5000, workers: int | None = None,
                  quiet: bool = False, scenario: str | None = None, overrides: tuple = ()) -> dict:
