@@ -39,9 +39,12 @@ sys.path.insert(0, str(ROOT / "src"))
 
 from homeo_sim.runner import RunConfig, run_seeds  # noqa: E402
 from homeo_sim.stats import aggregate  # noqa: E402
-from homeo_sim.thesis_values import TABLE_4_5  # noqa: E402
+from homeo_decision.scenario import load_scenario  # noqa: E402
 
-DRIVES = ["NAch", "NSoc", "NRes", "NEng"]
+# this tool calibrates the thesis scenario: its drive names and Table 4.5 come from thesis.json
+_THESIS = load_scenario()
+TABLE_4_5 = _THESIS.reference.metrics  # the scenario's reference block
+DRIVES = _THESIS.drive_names
 
 # ---------------------------------------------------------------------------
 # the configuration this calibration recommends (the "open" block of thesis.json)
