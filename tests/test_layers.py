@@ -105,3 +105,43 @@ def test_the_module_import_graph_has_no_cycle():
         if m not in state:
             cycle = visit(m)
             assert cycle is None, " -> ".join(cycle)
+
+
+# -- the scenario is data everywhere (issue 10) ------------------------------------------------------
+def _docstrings(tree: ast.AST) -> set[int]:
+    out = set()
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) and node.body:
+            first = node.body[0]
+            if isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant) and isinstance(first.value.value, str):
+                out.add(id(first.value))
+    return out
+
+
+def test_no_drive_object_action_or_motivation_name_of_the_thesis_in_code(thesis):
+    """String literals (docstrings aside: they cite the thesis) and identifiers of every module:
+    no word may be a drive, motivation, object or action name of the thesis scenario, nor a
+    prefix of an action name (e.g. a "MoveTo" convention)."""
+    import re
+
+    names = set(thesis.drive_names) | set(thesis.motivation_names) | set(thesis.action_names) | set(thesis.objects)
+    prefixes = {a[:k] for a in thesis.action_names for k in range(4, len(a))}
+    hits = []
+    files = sorted(SRC.rglob("*.py"))
+    for f in files:
+        tree = ast.parse(f.read_text(), str(f))
+        docs = _docstrings(tree)
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in docs:
+                words = set(re.findall(r"[A-Za-z]+", node.value))
+                bad = words & names or ({node.value} & prefixes)
+            elif isinstance(node, ast.Name):
+                bad = {node.id} & names
+            elif isinstance(node, ast.Attribute):
+                bad = {node.attr} & names
+            else:
+                continue
+            if bad:
+                hits.append(f"{f.relative_to(SRC)}:{node.lineno}: {sorted(bad)}")
+    assert len(files) > 50
+    assert not hits, "\n".join(hits)

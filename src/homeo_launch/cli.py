@@ -58,6 +58,8 @@ def main(argv=None) -> int:
     import signal
 
     signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
+    # Ctrl-C however the launcher was started: a script's background job inherits SIGINT ignored
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     ap = build_parser()
     try:
         args = ap.parse_args(argv)
