@@ -33,7 +33,7 @@ def motivational_state(drives: Sequence[float], thresholds: Sequence[float], sti
     """Eq 3.2 then Eq 3.3: the intensities and the dominant motivation (the robot's internal state,
     Eq 3.6). The one place both are combined: perception, the pseudo state of Eq 3.23 and the
     baselines all call it."""
-    inten = intensities(drives, thresholds, stimulus)
+    inten = [0.0 if d < at else d + s for d, at, s in zip(drives, thresholds, stimulus)]  # Eq 3.2, inlined: hot path
     return inten, dominant(inten, tie_break)
 
 

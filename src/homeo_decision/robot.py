@@ -164,7 +164,8 @@ class Robot:
     def step(self, t: int, obs: Observation, out: Outcome | None, final: bool = False) -> int | None:
         r = self.recognised = self.recognition.tick(obs, out)
         per = self.perception
-        return self.decision.tick(t, per.tick(obs.code, r.intention, obs.body, out), out, per.after_action, final)
+        perceived = per.tick(obs.code, r.intention, obs.body, out)
+        return self.decision.tick(t, perceived, out, per.after_action, final)
 
     @property
     def percept(self) -> Percept | None:
@@ -186,12 +187,13 @@ def run_loop(env: Environment, robot: Robot, iterations: int, obs: Observation |
     if obs is None:
         obs = env.observe()
     end = t0 + iterations
-    a = robot.step(t0, obs, None, final=iterations == 0)
+    step, env_step, observe = robot.step, env.step, env.observe
+    a = step(t0, obs, None, iterations == 0)
     dec = robot.decision
     for t in range(t0, end):
         p, r = dec.prev, robot.recognised
-        out = env.step(a)
-        a_next = robot.step(t + 1, env.observe(), out, final=t + 1 == end)
+        out = env_step(a)
+        a_next = step(t + 1, observe(), out, t + 1 == end)
         if on_tick is not None:
             on_tick(t, p, r, a, out)
         a = a_next
