@@ -17,9 +17,9 @@ qi = pytest.importorskip("qi")
 
 from rosgraph import Probe, fresh_domain  # noqa: E402
 
-from homeo_sim.processes import Graph, graph_env  # noqa: E402
+from homeo_launch.pepper import pepper_specs  # noqa: E402
+from homeo_launch.processes import Graph, graph_env  # noqa: E402
 from pepper_bridge.config import load_config  # noqa: E402
-from pepper_bridge.launch_pepper import pepper_specs  # noqa: E402
 from pepper_bridge.mapping import BATTERY_KEY, EMOTION_EVENT, TOUCH_EVENTS, WORD_EVENT  # noqa: E402
 from pepper_bridge.standin import StandinRobot  # noqa: E402
 
@@ -29,7 +29,7 @@ START_S = 60.0
 ROBOT = "pepper_bridge: robot"
 NRES = {0: 0.0, 1: 50.0, 2: 80.0, 3: 100.0}  # Table 4.6
 
-LAUNCH = ("import sys; from homeo_sim.cli import Parser; from pepper_bridge.launch_pepper import add_parser, cmd_pepper;"
+LAUNCH = ("import sys; from homeo_msgs_py.cli_args import Parser; from homeo_launch.pepper import add_parser, cmd_pepper;"
           "ap = Parser(prog='homeo-launch'); sub = ap.add_subparsers(dest='cmd', required=True); add_parser(sub);"
           "sys.exit(cmd_pepper(ap.parse_args(sys.argv[1:])))")
 
@@ -165,7 +165,7 @@ def test_robot_dropping_and_coming_back_is_survived(live):
 
 def test_field_test_through_the_graph_matches_the_in_process_driver(tmp_path):
     """Both robots of the field test, run through the node graph, give homeo-pepper-field's log row for row."""
-    from pepper_bridge.field import run_field, train_q
+    from homeo_launch.field import run_field, train_q
 
     q = {"dedicated": str(train_q(tmp_path / "qd.json", 0.25)), "selfish": str(train_q(tmp_path / "qs.json", 0.0))}
     r = subprocess.run([sys.executable, "-c", LAUNCH, "pepper", "--field", "--script", "field_user.json", "--seed", "0",
