@@ -8,7 +8,7 @@ import json
 import pytest
 
 from homeo_decision.scenario import load_scenario, scenario_from_dict
-from homeo_sim.scenarios import default_scenario_path
+from homeo_decision.scenarios import default_scenario_path
 
 
 def _toy_dict() -> dict:

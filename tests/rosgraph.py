@@ -9,7 +9,7 @@ import os
 import time
 from contextlib import contextmanager
 
-from homeo_sim.processes import dds_defaults
+from homeo_launch.processes import dds_defaults
 
 os.environ.update(dds_defaults())  # before any rclpy context of the test process
 
@@ -50,10 +50,11 @@ class Probe:
         """Decoded JSON of every message on a homeo topic, appended as they arrive."""
         from std_msgs.msg import String
 
+        from homeo_msgs_py.graph import key_of
         from homeo_msgs_py.qos import sub_qos
 
         got: list = []
-        self.node.create_subscription(String, topic, lambda m: got.append(json.loads(m.data)), sub_qos(topic))
+        self.node.create_subscription(String, topic, lambda m: got.append(json.loads(m.data)), sub_qos(key_of(topic)))
         return got
 
     def diagnostics(self) -> dict:
@@ -72,9 +73,10 @@ class Probe:
     def publisher(self, topic: str):
         from std_msgs.msg import String
 
+        from homeo_msgs_py.graph import key_of
         from homeo_msgs_py.qos import pub_qos
 
-        pub = self.node.create_publisher(String, topic, pub_qos(topic))
+        pub = self.node.create_publisher(String, topic, pub_qos(key_of(topic)))
         return lambda text: pub.publish(String(data=text))
 
     def call(self, srv_type, name: str, request, timeout: float = 20.0):
@@ -99,8 +101,8 @@ class Probe:
 @contextmanager
 def sim_graph(opts, domain: int):
     """The four simulation nodes as processes on ``domain``; stopped and checked on exit."""
-    from homeo_sim.launch import sim_specs
-    from homeo_sim.processes import Graph, graph_env
+    from homeo_launch.processes import Graph, graph_env
+    from homeo_launch.sim import sim_specs
 
     g = Graph(sim_specs(opts), graph_env(domain))
     g.start()

@@ -83,8 +83,8 @@ def test_rule_hand_checked_choices(thesis, where, kw, d, expected):
     assert a in thesis.c.valid[code]
 
 
-def test_rule_refuses_a_scenario_it_was_not_written_for(toy):
-    with pytest.raises(ValueError, match="thesis scenario"):
+def test_rule_needs_the_scenarios_rule_policy_block(toy):
+    with pytest.raises(ValueError, match="no 'rule_policy' block"):
         RulePolicy(toy)
 
 
@@ -261,3 +261,115 @@ def test_adaptive_settings_validate():
         AdaptiveDoDSettings(target_hsr=1.5)
     with pytest.raises(ValueError):
         AdaptiveDoDSettings(period=0)
+
+
+# -- the rule baseline as scenario data: the thesis's rules give exactly the old hand-coded choices ---
+
+class OldThesisRule:
+    """The hand-coded rule of the thesis scenario as it was before the rules became data (the oracle)."""
+
+    def __init__(self, sc):
+        thr = {d.name: d.threshold for d in sc.drives}
+        self.charge_at, self.charge_until, self.rest_at, self.chat_at = thr["NEng"], 10.0, thr["NRes"], thr["NSoc"]
+        names = sc.drive_names
+        self.i_eng, self.i_res, self.i_soc = names.index("NEng"), names.index("NRes"), names.index("NSoc")
+        self.a = {n: sc.action_index(n) for n in ("MoveToC", "Attach", "Stay", "Rest", "MoveToR", "Chat", "MoveToH")}
+        self.desired = [tuple(sc.c.action_ids[a] for a in it.desired) for it in sc.intentions]
+        self.sc = sc
+
+    def select(self, d, code):
+        v = self.sc.c.views[code]
+        valid = self.sc.c.valid[code]
+        a = self.a
+        near_charger = v["charger.distance"] == "near"
+        charging = v["charger.status"] == "charging"
+        if d[self.i_eng] >= self.charge_at or (charging and near_charger and d[self.i_eng] > self.charge_until):
+            if not near_charger:
+                return a["MoveToC"]
+            return a["Stay"] if charging else a["Attach"]
+        it = self.sc.c.intention_of[code]
+        if it:
+            for act in self.desired[it - 1]:
+                if act in valid:
+                    return act
+        if d[self.i_res] >= self.rest_at:
+            return a["Rest"] if a["Rest"] in valid else a["MoveToR"]
+        if d[self.i_soc] >= self.chat_at and v["human.relation"] != "absent":
+            return a["Chat"] if a["Chat"] in valid else a["MoveToH"]
+        for act in (a["Rest"], a["Chat"]):
+            if act in valid:
+                return act
+        return valid[0]
+
+
+def test_rule_data_matches_the_old_hand_coded_rule_in_every_world(thesis):
+    old, new = OldThesisRule(thesis), RulePolicy(thesis)
+    levels = (0, 9, 10, 11, 49, 50, 51, 69, 70, 100)
+    n = 0
+    for code in range(0, thesis.n_codes):
+        for nsoc in levels[::2]:
+            for nres in levels:
+                for neng in levels:
+                    d = drives(nach=5, nsoc=nsoc, nres=nres, neng=neng)
+                    assert new.select(new.perceive(d, code), 0) == old.select(d, code), (thesis.decode(code), d)
+                    n += 1
+    assert n == thesis.n_codes * 5 * 100
+
+
+@pytest.mark.parametrize("seed", [0, 3, 7])
+def test_rule_runs_match_the_old_hand_coded_rule(thesis, seed, monkeypatch):
+    import homeo_decision.baselines as bl
+
+    new = run_episode(RunConfig(iterations=600, seed=seed, policy="rule"), keep_actions=True)
+
+    class OldAsPolicy(bl.RulePolicy):
+        def __init__(self, sc, seed=0, **kw):
+            super().__init__(sc, seed, **kw)
+            self.old = OldThesisRule(sc)
+
+        def select(self, p, t):
+            return self.old.select(p.drives, p.code)
+
+    monkeypatch.setattr(bl, "RulePolicy", OldAsPolicy)
+    assert isinstance(bl.make_policy("rule", thesis), OldAsPolicy)  # the runner really gets the oracle
+    old = run_episode(RunConfig(iterations=600, seed=seed, policy="rule"), keep_actions=True)
+    assert len(new.actions) == 600 and new.actions == old.actions
+    assert new.metrics == old.metrics
+
+
+def test_rule_fall_through_and_default(toy_raw):
+    raw = toy_raw()
+    # rule 1 picks only TurnOn, which is invalid away from the box: fall through to rule 2 (its 'when' fails
+    # while the box is off) and then to the first valid action
+    raw["rule_policy"] = {"rules": [
+        {"name": "a", "actions": [{"action": "TurnOn"}]},
+        {"name": "b", "actions": [{"action": "GoB", "when": {"box.status": ["on"]}}]}]}
+    from homeo_decision.scenario import scenario_from_dict
+
+    sc = scenario_from_dict(raw)
+    pol = RulePolicy(sc)
+    at_h = sc.encode({"robot.location": "H", "human.presence": "present", "intention": "none", "box.status": "off"})
+    assert sc.action_names[pol.select(pol.perceive([0.0, 0.0], at_h), 0)] == sc.action_names[sc.c.valid[at_h][0]]
+    at_b = sc.encode({"robot.location": "B", "human.presence": "present", "intention": "none", "box.status": "off"})
+    assert sc.action_names[pol.select(pol.perceive([0.0, 0.0], at_b), 0)] == "TurnOn"
+    on_h = sc.encode({"robot.location": "H", "human.presence": "present", "intention": "none", "box.status": "on"})
+    assert sc.action_names[pol.select(pol.perceive([0.0, 0.0], on_h), 0)] == "GoB"
+
+
+def test_rule_hysteresis_keeps_going_above_the_low_mark(toy_raw):
+    raw = toy_raw()
+    raw["rule_policy"] = {"rules": [
+        {"name": "go", "drive": "NEng", "keep_while": {"when": {"box.distance": ["near"]}, "above": 20},
+         "actions": [{"action": "GoB", "when": {"box.distance": ["far"]}}, {"action": "TurnOff"}]},
+        {"name": "rest", "actions": [{"action": "Wait"}]}]}
+    from homeo_decision.scenario import scenario_from_dict
+
+    sc = scenario_from_dict(raw)
+    pol = RulePolicy(sc)
+    w = lambda loc: sc.encode({"robot.location": loc, "human.presence": "present", "intention": "none",  # noqa: E731
+                               "box.status": "off"})
+    pick = lambda neng, loc: sc.action_names[pol.select(pol.perceive([0.0, float(neng)], w(loc)), 0)]  # noqa: E731
+    assert pick(50, "H") == "GoB"  # at the threshold (50, the default 'at')
+    assert pick(49, "H") == "Wait"  # below it, away from the box: no hysteresis
+    assert pick(30, "B") == "TurnOff"  # below it but at the box and above 20: keep going
+    assert pick(20, "B") == "Wait"  # at the low mark: stop

@@ -216,3 +216,50 @@ def _state(pid: int) -> str:
             return fh.read().rsplit(")", 1)[1].split()[0]
     except OSError:
         return "X"
+
+
+# -- the scenario as data: the reference column and the rule baseline come from the scenario -------
+
+def test_table_has_the_reference_column_only_when_the_scenario_has_one():
+    thesis = cli("run", "--iterations", 50, "--quiet")
+    garden = cli("run", "--iterations", 50, "--quiet", "--scenario", "garden")
+    assert thesis.returncode == 0 and garden.returncode == 0, thesis.stderr + garden.stderr
+    head_t = thesis.stdout.splitlines()[1]
+    head_g = garden.stdout.splitlines()[1]
+    assert head_t.split() == ["metric", "drive", "ours", "thesis"]
+    assert head_g.split() == ["metric", "drive", "ours"]
+    cda_t = next(x for x in thesis.stdout.splitlines() if x.startswith("CDA") and "NAch" in x)
+    assert cda_t.rstrip().endswith("1.73")  # Table 4.5, from the scenario's reference block
+    assert "Duty" in garden.stdout and "NAch" not in garden.stdout
+
+
+def test_format_table_reference_cells():
+    from homeo_sim.cli import format_table
+
+    d = {"mean": 0.5, "ci95": [0.5, 0.5]}
+    out = {"iterations": 10, "seeds": [0], "metrics": {"HSR": d, "RSR": d, "CDA": {"A": d, "all": d},
+                                                       "CEDA": {"A": d, "all": d}}}
+    with_ref = format_table(out, ["A"], "s", {"HSR": 0.25, "CDA": {"A": 7.0}})
+    lines = with_ref.splitlines()
+    assert lines[2].rstrip().endswith("0.25") and lines[3].rstrip().endswith("0.500")  # RSR: no published value
+    assert lines[4].rstrip().endswith("7.00")
+    assert "thesis" not in format_table(out, ["A"], "s", None)
+
+
+@pytest.mark.parametrize("intention", ["oracle", "bayes"])
+def test_run_on_the_second_scenario(intention):
+    proc = cli("run", "--scenario", "garden", "--iterations", 200, "--seeds", 2, "--json", "--quiet",
+               "--intention", intention, "--workers", 1)
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    assert set(out["metrics"]["CDA"]) == {"Duty", "Heat", "Power", "all"}
+    assert ("intention_accuracy" in out) == (intention == "bayes")
+
+
+def test_rule_policy_on_the_second_scenario_and_without_a_block(tmp_path, toy_raw):
+    proc = cli("run", "--scenario", "garden", "--iterations", 200, "--policy", "rule", "--json", "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout)["metrics"]["RSR"]["mean"] > 0.5
+    p = tmp_path / "toy.json"
+    p.write_text(json.dumps(toy_raw()))
+    assert_one_line_error(cli("run", "--scenario", p, "--iterations", 20, "--policy", "rule"), "rule_policy", "toy.json")

@@ -17,8 +17,8 @@ import pytest
 
 from rosgraph import Probe, fresh_domain, sim_graph
 
-from homeo_sim.launch import SimOptions
-from homeo_sim.processes import graph_env
+from homeo_launch.processes import graph_env
+from homeo_launch.sim import SimOptions
 
 pytestmark = pytest.mark.ros
 
@@ -43,7 +43,7 @@ def _status_tick(status: list) -> int:
 def test_launcher_prints_exactly_the_in_process_metrics_and_the_same_actions(tmp_path, intention):
     n, seed = 300, 4
     d = fresh_domain()
-    g = _cli("homeo_sim.launch", "sim", "--iterations", str(n), "--seed", str(seed), "--json", "--quiet",
+    g = _cli("homeo_launch.cli", "sim", "--iterations", str(n), "--seed", str(seed), "--json", "--quiet",
              "--intention", intention, "--trace", str(tmp_path / "graph.jsonl"), domain=d)
     assert g.returncode == 0, g.stderr
     p = _cli("homeo_sim.cli", "run", "--iterations", str(n), "--seed", str(seed), "--json", "--quiet",
@@ -142,7 +142,7 @@ def _garbage(topic_schema: str) -> list[str]:
 
 
 def test_garbage_on_every_input_topic_is_rejected_and_reported_while_the_run_goes_on():
-    from homeo_msgs_py.topics import TOPICS
+    from homeo_msgs_py.graph import TOPICS, key_of
 
     inputs = {  # topic -> the nodes that read it
         "/homeo/action": ["homeo_sim"], "/homeo/drives": ["homeo_decision"],
@@ -162,7 +162,7 @@ def test_garbage_on_every_input_topic_is_rejected_and_reported_while_the_run_goe
             probe.spin_until(lambda: False, 1.0)
             before = _status_tick(status)
             for topic in inputs:
-                for text in _garbage(TOPICS[topic][0]):
+                for text in _garbage(TOPICS[key_of(topic)].schema):
                     pubs[topic](text)
                     probe.spin_until(lambda: False, 0.05)
             # a well-formed but stale action: tick 0 is long past
@@ -216,7 +216,7 @@ def _alive(pid: int) -> bool:
 
 
 def _start_launcher(domain: int, *extra) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "homeo_sim.launch", "sim", "--iterations", "0", "--quiet", *extra],
+    return subprocess.Popen([sys.executable, "-m", "homeo_launch.cli", "sim", "--iterations", "0", "--quiet", *extra],
                             env=_env(domain), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
@@ -271,30 +271,30 @@ def test_a_dead_node_is_named_and_the_rest_are_stopped():
 def test_a_graph_that_cannot_start_is_a_clear_error(tmp_path):
     bad = tmp_path / "bad.json"
     bad.write_text("{not json")
-    r = _cli("homeo_sim.launch", "sim", "--iterations", "10", "--scenario", str(bad), domain=fresh_domain(), timeout=60)
+    r = _cli("homeo_launch.cli", "sim", "--iterations", "10", "--scenario", str(bad), domain=fresh_domain(), timeout=60)
     assert r.returncode == 2 and "Traceback" not in r.stderr and "bad.json" in r.stderr
 
 
 # -- homeo-topic ----------------------------------------------------------------------------------------
 def test_homeo_topic_echo_list_pub_param_and_call():
     d = fresh_domain()
-    r = _cli("homeo_msgs_py.topic_cli", "pub", "/homeo/action", '{"action": "Dance"}', domain=d, timeout=60)
+    r = _cli("homeo_launch.topic_cli", "pub", "/homeo/action", '{"action": "Dance"}', domain=d, timeout=60)
     assert r.returncode == 2 and "unknown action 'Dance'" in r.stderr and "Traceback" not in r.stderr
     with sim_graph(SimOptions(iterations=0, rate=20.0), d):
         _wait_running(d)
-        r = _cli("homeo_msgs_py.topic_cli", "echo", "/homeo/drives", "--count", "1", "--timeout", "30", domain=d)
+        r = _cli("homeo_launch.topic_cli", "echo", "/homeo/drives", "--count", "1", "--timeout", "30", domain=d)
         assert r.returncode == 0, r.stderr
         msg = json.loads(r.stdout)
         assert msg["schema"] == "homeo/drives" and msg["m_dom"] in ("Serving", "Social", "Relaxative", "Survival")
-        r = _cli("homeo_msgs_py.topic_cli", "list", "--wait", "8", domain=d)
+        r = _cli("homeo_launch.topic_cli", "list", "--wait", "8", domain=d)
         assert r.returncode == 0 and "homeo_decision" in r.stdout and "/homeo/outcome" in r.stdout
-        r = _cli("homeo_msgs_py.topic_cli", "param", "/homeo_decision", "dod", "0.3", domain=d)
+        r = _cli("homeo_launch.topic_cli", "param", "/homeo_decision", "dod", "0.3", domain=d)
         assert r.returncode == 0, r.stderr
-        r = _cli("homeo_msgs_py.topic_cli", "param", "/homeo_decision", "dod", domain=d)
+        r = _cli("homeo_launch.topic_cli", "param", "/homeo_decision", "dod", domain=d)
         assert r.returncode == 0 and json.loads(r.stdout) == 0.3
-        r = _cli("homeo_msgs_py.topic_cli", "param", "/homeo_decision", "dod", "7", domain=d)
+        r = _cli("homeo_launch.topic_cli", "param", "/homeo_decision", "dod", "7", domain=d)
         assert r.returncode == 2 and "refused" in r.stderr
-        r = _cli("homeo_msgs_py.topic_cli", "call", "/homeo_decision/save_q", domain=d)
+        r = _cli("homeo_launch.topic_cli", "call", "/homeo_decision/save_q", domain=d)
         assert r.returncode == 1 and "q_table_path is not set" in r.stdout
-        r = _cli("homeo_msgs_py.topic_cli", "pub", "/homeo/observation", '{"intention": "come", "tick": 0}', domain=d)
+        r = _cli("homeo_launch.topic_cli", "pub", "/homeo/observation", '{"intention": "come", "tick": 0}', domain=d)
         assert r.returncode == 0, r.stderr

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from homeo_decision.scenario import ScenarioError, scenario_from_dict
-from homeo_intention import IntentionModel, IntentionModelError, OracleModel, UnknownObservation
+from homeo_intention import IntentionModel, IntentionModelError, UnknownObservation
 from homeo_intention.em import Params, run_em
 from homeo_intention.network import INTENTION, posterior_table
 
@@ -106,13 +106,14 @@ def test_unknown_symbols_are_rejected_with_the_known_ones(toy_sc):
 
 
 def test_oracle_returns_the_true_intention(toy_sc):
-    o = OracleModel(toy_sc)
-    r = o.recognise({"intention": "come", "gesture": "none"})
+    from homeo_decision.environment import Observation
+    from homeo_decision.robot import OracleRecognition
+
+    o = OracleRecognition(toy_sc)
+    r = o.tick(Observation(0, (), 2, {"gesture": "none"}), None)
     assert (r.intention, r.posterior, r.confidence) == (2, [0.0, 0.0, 1.0], 1.0)
-    with pytest.raises(UnknownObservation, match="unknown intention 'dance'"):
-        o.recognise({"intention": "dance"})
-    with pytest.raises(UnknownObservation, match="needs the true intention"):
-        o.recognise({"gesture": "none"})
+    with pytest.raises(ValueError, match="needs the intention"):
+        o.check(Observation(0, (), None, {"gesture": "none"}))
 
 
 # -- the scenario's observations block ------------------------------------------------------

@@ -10,7 +10,6 @@ from collections import Counter
 import pytest
 
 from homeo_decision.scenario import load_scenario
-from homeo_intention import OracleModel
 from homeo_sim.human import SimHuman
 from homeo_sim.metrics import accuracy_curve, accuracy_ends
 from homeo_sim.runner import RunConfig, Simulation, run_episode
@@ -54,10 +53,15 @@ def test_clarified_follows_the_reveal_rule(thesis):
     assert hn.respond(wrong).clarified is None and hn.respond(wrong).proposal is not None
 
 
-def test_model_loop_with_the_oracle_equals_the_fast_loop(thesis):
+def test_the_bayes_loop_with_an_oracle_part_equals_the_oracle_loop(thesis):
+    """One loop: the same run with the recognition part swapped for the oracle (and the cues
+    drawn) gives the oracle run's metrics, and a perfect recognition accuracy."""
+    from homeo_decision.robot import OracleRecognition, Robot
+
     fast = run_episode(RunConfig(iterations=1500, seed=4), thesis)
-    sim = Simulation(thesis, RunConfig(iterations=1500, seed=4))
-    sim.model = OracleModel(thesis)
+    sim = Simulation(thesis, RunConfig(iterations=1500, seed=4, intention="bayes"))
+    sim.recognition = OracleRecognition(thesis)
+    sim.robot = Robot(thesis, sim.policy, sim.recognition)
     slow = sim.run(1500)
     acc = slow.metrics.pop("intention_accuracy")
     assert slow.metrics == fast.metrics

@@ -6,20 +6,20 @@ import json
 
 import pytest
 
-from homeo_decision.perception import world_fields
+from homeo_decision.codec import vocabulary, world_state
 from homeo_msgs_py.lockstep import TickJoin
-from homeo_msgs_py.schemas import Message, Rejected, Vocabulary, decode, encode
+from homeo_msgs_py.schemas import Message, Rejected, decode, encode
 from homeo_msgs_py.diagnostics import RejectLog
-from homeo_msgs_py.topics import TOPICS
+from homeo_msgs_py.graph import TOPICS
 
 
 @pytest.fixture(scope="module")
 def voc(thesis):
-    return Vocabulary(thesis)
+    return vocabulary(thesis)
 
 
 def _world(thesis) -> dict:
-    w = world_fields(thesis, thesis.encode({"robot.location": "R", "human.presence": "present", "intention": "none",
+    w = world_state(thesis, thesis.encode({"robot.location": "R", "human.presence": "present", "intention": "none",
                                             "charger.status": "idle", "player.status": "idle",
                                             "light.status": "off"}))
     w["body"] = {"NRes": 12.0, "NEng": 40.0, "battery_percent": 60}
@@ -90,7 +90,7 @@ def test_scenario_values_are_checked(thesis, voc):
 def test_every_topic_has_a_schema():
     from homeo_msgs_py.schemas import SCHEMAS
 
-    assert {s for s, _ in TOPICS.values()} <= set(SCHEMAS)
+    assert {t.schema for t in TOPICS.values()} <= set(SCHEMAS)
 
 
 def _m(tick, run=0):

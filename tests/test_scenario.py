@@ -127,15 +127,15 @@ def test_moves_have_no_drive_effect(thesis, enc):
         assert set(delta(thesis, enc(thesis, "R"), a).values()) == {0.0}
 
 
-def test_leaving_charger_detaches_when_open_choice_true(thesis, enc):
-    assert thesis.open["leaving_charger_detaches"] is True
+def test_on_leave_effects_when_open_choice_true(thesis, enc):
+    assert thesis.open["on_leave_effects"] is True
     code = enc(thesis, "C", charger="charging")
     for move in ("MoveToH", "MoveToR"):
         assert after(thesis, code, move)["charger.status"] == "idle", move
 
 
 def test_leaving_charger_keeps_charging_when_open_choice_false(enc):
-    sc = load_scenario(overrides={"leaving_charger_detaches": False})
+    sc = load_scenario(overrides={"on_leave_effects": False})
     code = enc(sc, "C", charger="charging")
     assert after(sc, code, "MoveToH")["charger.status"] == "charging"
 
@@ -147,7 +147,7 @@ def test_on_leave_mechanism_detaches_when_declared(thesis_raw, enc):
     code = enc(sc, "C", charger="charging")
     assert after(sc, code, "MoveToR")["charger.status"] == "idle"
     assert after(sc, code, "MoveToC")["charger.status"] == "charging"  # not leaving: stays attached
-    sc_off = scenario_from_dict(thesis_raw, overrides={"leaving_charger_detaches": False})
+    sc_off = scenario_from_dict(thesis_raw, overrides={"on_leave_effects": False})
     assert after(sc_off, code, "MoveToR")["charger.status"] == "charging"
 
 
@@ -229,7 +229,7 @@ def test_unknown_open_choice_via_override(thesis_raw):
 
 
 @pytest.mark.parametrize("key, value", [("human_no_intention_prob", 1.5), ("human_leave_prob", -0.1),
-                                        ("initial_q", 1e9), ("nach_growth", "sometimes"), ("tie_break", "random")])
+                                        ("initial_q", 1e9), ("serving_growth", "sometimes"), ("tie_break", "random")])
 def test_out_of_range_open_value(thesis_raw, key, value):
     thesis_raw["open"][key] = value
     expect_error(thesis_raw, f"open.{key}", repr(value))

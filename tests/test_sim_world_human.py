@@ -75,7 +75,7 @@ def test_unsatisfied_gives_scolding_and_proposal(always, enc):
 
 @pytest.mark.parametrize("rule", ["MoveToR", "MoveToC"])
 def test_leave_proposal_follows_open_choice(enc, rule):
-    sc = load_scenario(overrides={"human_no_intention_prob": 0.0, "human_leave_proposal": rule})
+    sc = load_scenario(overrides={"human_no_intention_prob": 0.0, "human_proposal_choice": rule})
     h = draw_intention(sc, enc(sc, "H"), "leave")
     r = h.respond(sc.action_index("Chat"))
     assert r.feedback == -1 and r.proposal == sc.action_index(rule)
@@ -200,9 +200,9 @@ def test_scolding_uses_open_choice():
     ("expressed", False, False, False), ("expressed", True, False, True), ("expressed", True, True, True),
     ("unsatisfied", False, False, False), ("unsatisfied", True, False, True), ("unsatisfied", True, True, False),
 ])
-def test_nach_growth_open_choice(growth, expressed, satisfied, grows):
+def test_serving_growth_open_choice(growth, expressed, satisfied, grows):
     # Table 4.2: NAch +3 (when it grows), NSoc +3 always; body drives untouched by the robot's model
-    sc = load_scenario(overrides={"nach_growth": growth})
+    sc = load_scenario(overrides={"serving_growth": growth})
     dm = model(sc, [10, 20, 30, 40])
     dm.apply_time(expressed, satisfied)
     assert dm.values == [13.0 if grows else 10.0, 23.0, 30.0, 40.0]
@@ -256,7 +256,7 @@ def test_world_execute_and_set_human(thesis):
 
 # -- the runner's loop, checked line by line from its trace ------------------------------------
 
-TRACE_OPEN = (("nach_growth", "expressed"), ("scold_drive_change", 0.0), ("human_leave_proposal", "first"),
+TRACE_OPEN = (("serving_growth", "expressed"), ("scold_drive_change", 0.0), ("human_proposal_choice", "first"),
               ("human_proposal_prob", 1.0), ("reward_span", "iteration"))
 
 
@@ -270,7 +270,7 @@ def trace(tmp_path_factory):
 
 def test_trace_drives_follow_tables_4_1_and_4_2(thesis, trace):
     # d(t+1) = clamp(clamp(clamp(d + action effect) + praise) + growth); NAch grows only with an intention
-    # (open.nach_growth = "expressed"); the world is tracked from the actions (intention does not matter)
+    # (open.serving_growth = "expressed"); the world is tracked from the actions (intention does not matter)
     names = thesis.drive_names
     world = World(thesis)
     rates = [3, 3, 2, 2]
@@ -298,7 +298,7 @@ def test_trace_feedback_follows_algorithm_2(thesis, trace):
         elif cur["action"] in desired[it]:
             assert (cur["feedback"], cur["proposal"]) == (1, None)
         else:
-            # TRACE_OPEN: human_leave_proposal "first" (MoveToR for leave), proposal probability 1
+            # TRACE_OPEN: human_proposal_choice "first" (MoveToR for leave), proposal probability 1
             assert cur["feedback"] == -1
             assert cur["proposal"] == thesis.intentions[thesis.intention_names.index(it) - 1].desired[0]
             assert nxt["intention"] == it  # rule 1: an unsatisfied intention remains

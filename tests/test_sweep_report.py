@@ -132,3 +132,47 @@ def test_report_writes_pngs_and_markdown(tmp_path):
     assert all(c["why"] for c in data["checks"] if not c["ok"])  # a failing check always says why
     res = json.loads((tmp_path / "results.json").read_text())
     assert res["policies"]["rule"]["metrics"]["HSR"]["per_seed"] == data["policies"]["rule"]["metrics"]["HSR"]["per_seed"]
+
+
+# -- a scenario other than the thesis's: its own drive names, no reference block ---------------------
+
+@pytest.mark.parametrize("param", ["dod", "xi", "pseudo"])
+def test_sweeps_on_the_second_scenario(tmp_path, param):
+    proc = cli("sweep", param, "--scenario", "garden", "--seeds", "2", "--iterations", "60", "--quiet", "--workers", "1",
+               "--out", tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "CDA Duty" in proc.stdout.splitlines()[1] and "NAch" not in proc.stdout
+    data = json.loads((tmp_path / f"sweep-{param}.json").read_text())
+    assert [p["value"] for p in data["points"]] == list(SWEEPS[param])
+    assert set(data["points"][0]["metrics"]["CDA"]) == {"Duty", "Heat", "Power", "all"}
+    assert any(p.suffix == ".png" for p in tmp_path.iterdir())
+
+
+def test_report_on_the_second_scenario_skips_the_thesis_comparisons(tmp_path):
+    proc = cli("report", "--scenario", "garden", "--seeds", "2", "--iterations", "300", "--quiet", "--workers", "2",
+               "--out", tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    md = (tmp_path / "report.md").read_text()
+    assert "no reference block" in md and "The thesis says" not in md and "What the thesis says" not in md
+    assert "| thesis |" not in md and "CDA Duty" in md and "Baselines" in md and "threshold rules" in md
+    res = json.loads((tmp_path / "results.json").read_text())
+    assert res["statements"] == [] and res["scenario"] == "garden"
+    assert set(res["policies"]) == {"objectq", "random", "rule", "flatq", "nofeedback", "adaptive"}
+    assert "CDA_Duty@500" in res["pseudo_early"]["on"]
+    for png in ("fig4_1_drives.png", "fig4_4_pseudo.png", "fig4_5_dod.png", "baselines.png"):
+        assert (tmp_path / png).read_bytes()[:4] == b"\x89PNG"
+
+
+def test_report_without_a_rule_policy_skips_the_rule_baseline(tmp_path):
+    from homeo_decision.scenario import load_scenario, scenario_from_dict
+    from homeo_decision.scenarios import SCENARIO_DIR
+    from homeo_sim.report import baselines_for, report_configs
+    from homeo_sim.runner import RunConfig as RC
+
+    raw = json.loads((SCENARIO_DIR / "garden.json").read_text())
+    raw.pop("rule_policy")
+    sc = scenario_from_dict(raw)
+    assert baselines_for(sc) == ("random", "flatq", "nofeedback")
+    cfgs = report_configs(RC(iterations=10), baselines_for(sc))
+    assert "policy=rule" not in cfgs and "policy=flatq" in cfgs
+    assert "policy=rule" in report_configs(RC(iterations=10), baselines_for(load_scenario()))

@@ -2,7 +2,7 @@
 """Calibration of the open choices of the thesis scenario (see docs/FIDELITY.md).
 
 Every equation of the thesis stays as it is; only the values under ``open`` in
-``src/homeo_sim/scenarios/thesis.json`` (``homeo_decision.scenario.OPEN_CHOICES`` plus the
+``src/homeo_decision/scenarios/thesis.json`` (``homeo_decision.scenario.OPEN_CHOICES`` plus the
 initial state) are searched. The script has three parts:
 
   --search       the staged grid search (screening with --screen-seeds seeds), the
@@ -39,9 +39,12 @@ sys.path.insert(0, str(ROOT / "src"))
 
 from homeo_sim.runner import RunConfig, run_seeds  # noqa: E402
 from homeo_sim.stats import aggregate  # noqa: E402
-from homeo_sim.thesis_values import TABLE_4_5  # noqa: E402
+from homeo_decision.scenario import load_scenario  # noqa: E402
 
-DRIVES = ["NAch", "NSoc", "NRes", "NEng"]
+# this tool calibrates the thesis scenario: its drive names and Table 4.5 come from thesis.json
+_THESIS = load_scenario()
+TABLE_4_5 = _THESIS.reference.metrics  # the scenario's reference block
+DRIVES = _THESIS.drive_names
 
 # ---------------------------------------------------------------------------
 # the configuration this calibration recommends (the "open" block of thesis.json)
@@ -52,15 +55,15 @@ CHOSEN: dict = {  # selected by --search (confirmation row 3); see docs/FIDELITY
     "initial_objects": {"charger.status": "idle", "player.status": "idle", "light.status": "off"},
     "initial_q": 0.0,
     "scold_drive_change": 5,
-    "nach_growth": "unsatisfied",
+    "serving_growth": "unsatisfied",
     "reward_span": "iteration",
-    "leaving_charger_detaches": True,
+    "on_leave_effects": True,
     "tie_break": "first",
     "value_max_over": "all",
     "human_no_intention_prob": 0.55,
     "human_leave_prob": 0.0,
     "human_return_prob": 1.0,
-    "human_leave_proposal": "random",
+    "human_proposal_choice": "random",
     "human_proposal_prob": 1.0,
 }
 
@@ -70,10 +73,10 @@ CHOSEN: dict = {  # selected by --search (confirmation row 3); see docs/FIDELITY
 def text_cost(o: dict) -> float:
     """0 = what the text says (or a value the text leaves wholly free); higher = further from it."""
     c = 0.0
-    c += {"always": 0.0, "expressed": 1.0, "unsatisfied": 1.0}[o["nach_growth"]]  # Table 4.2, Sec 3.3.1
+    c += {"always": 0.0, "expressed": 1.0, "unsatisfied": 1.0}[o["serving_growth"]]  # Table 4.2, Sec 3.3.1
     c += 1.0 if o["scold_drive_change"] <= 0 else 0.0  # Sec 3.3.1: "getting scolded ... increases it"
-    c += {"random": 0.0, "MoveToC": 0.5, "MoveToR": 0.5, "first": 0.5}[o["human_leave_proposal"]]  # Table 4.3
-    c += 0.0 if o["leaving_charger_detaches"] else 0.5
+    c += {"random": 0.0, "MoveToC": 0.5, "MoveToR": 0.5, "first": 0.5}[o["human_proposal_choice"]]  # Table 4.3
+    c += 0.0 if o["on_leave_effects"] else 0.5
     c += 0.0 if o["initial_q"] == 0 else 0.5
     c += 0.0 if o["value_max_over"] == "all" else 0.5  # Eq 3.15-3.16: max over A_o
     c += 0.0 if o["human_proposal_prob"] >= 1.0 else 1.0  # Algorithm 2 line 17: always proposes
@@ -242,14 +245,14 @@ def print_table(m: dict) -> None:
 ALTERNATIVES: list[tuple[str, list]] = [
     ("initial_q", [0.0, 1.0]),
     ("scold_drive_change", [0, 5, 10, 20]),
-    ("nach_growth", ["always", "expressed", "unsatisfied"]),
+    ("serving_growth", ["always", "expressed", "unsatisfied"]),
     ("reward_span", ["iteration", "action"]),
-    ("leaving_charger_detaches", [True, False]),
+    ("on_leave_effects", [True, False]),
     ("tie_break", ["first", "last"]),
     ("value_max_over", ["all", "valid"]),
     ("human_no_intention_prob", [0.0, 0.2, 0.4, 0.5, 0.6, 0.7]),
     ("human_leave_prob+human_return_prob", [(0.0, 1.0), (0.05, 0.5), (0.1, 0.2)]),
-    ("human_leave_proposal", ["MoveToR", "MoveToC", "random"]),
+    ("human_proposal_choice", ["MoveToR", "MoveToC", "random"]),
     ("human_proposal_prob", [1.0, 0.5, 0.0]),
     ("initial_drives", [{"NAch": 0, "NSoc": 0, "NRes": 0, "NEng": 0}, {"NAch": 50, "NSoc": 50, "NRes": 50, "NEng": 50},
                         {"NAch": 0, "NSoc": 0, "NRes": 0, "NEng": 90}]),
@@ -304,8 +307,8 @@ def probe_record_point(r: Runner, base: dict, seeds: int) -> None:
     cols = ["HSR", "RSR", "CDA_NAch", "CDA_all", "CEDA_all"]
     print("| configuration | d(t) sampled | " + " | ".join(c.replace("_", " ") for c in cols) + " |")
     print("|---|---|" + "---|" * len(cols))
-    variants = [("chosen", base), ("growth=expressed", dict(base, nach_growth="expressed")),
-                ("growth=always", dict(base, nach_growth="always"))]
+    variants = [("chosen", base), ("growth=expressed", dict(base, serving_growth="expressed")),
+                ("growth=always", dict(base, serving_growth="always"))]
     for label, o in variants:
         for when, sample in (("after growth (end of iteration)", "end"), ("before growth (after action)", "after_action")):
             m = r.run(dict(o, metrics_sample=sample), seeds)
@@ -317,16 +320,16 @@ def probe_record_point(r: Runner, base: dict, seeds: int) -> None:
 
 LITERAL_BASE = {
     "initial_q": 0.0, "tie_break": "first", "value_max_over": "all", "human_leave_prob": 0.0,
-    "human_return_prob": 1.0, "human_proposal_prob": 1.0, "leaving_charger_detaches": True,
+    "human_return_prob": 1.0, "human_proposal_prob": 1.0, "on_leave_effects": True,
     "initial_drives": {"NAch": 0, "NSoc": 0, "NRes": 0, "NEng": 0}, "initial_location": "R",
     "initial_objects": {"charger.status": "idle", "player.status": "idle", "light.status": "off"},
 }
 STAGE1 = {  # the choices the quick reading found decisive, full factorial
-    "nach_growth": ["always", "expressed", "unsatisfied"],
+    "serving_growth": ["always", "expressed", "unsatisfied"],
     "scold_drive_change": [0, 5, 10],
     "reward_span": ["iteration", "action"],
-    "human_leave_proposal": ["MoveToR", "MoveToC", "random"],
-    "leaving_charger_detaches": [True, False],
+    "human_proposal_choice": ["MoveToR", "MoveToC", "random"],
+    "on_leave_effects": [True, False],
     "human_no_intention_prob": [0.0, 0.2, 0.4, 0.5, 0.6, 0.7],
 }
 STAGE2 = {  # secondary choices, full factorial around the best stage-1 points
@@ -356,8 +359,8 @@ def expand(base: dict, grid: dict) -> list[dict]:
     return out
 
 
-SHORT = {"nach_growth": "growth", "scold_drive_change": "scold", "reward_span": "span", "human_leave_proposal": "leave",
-         "leaving_charger_detaches": "detach", "human_no_intention_prob": "p_none", "initial_q": "q0",
+SHORT = {"serving_growth": "growth", "scold_drive_change": "scold", "reward_span": "span", "human_proposal_choice": "leave",
+         "on_leave_effects": "detach", "human_no_intention_prob": "p_none", "initial_q": "q0",
          "value_max_over": "vmax", "tie_break": "tie", "human_leave_prob": "p_leave", "human_return_prob": "p_return",
          "human_proposal_prob": "p_prop"}
 

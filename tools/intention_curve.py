@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 
 from homeo_sim.metrics import accuracy_curve
-from homeo_sim.runner import RunConfig, run_seeds
+from homeo_sim.runner import RunConfig, build_scenario, run_seeds
 from homeo_sim.stats import aggregate, describe
 
 
@@ -43,7 +43,7 @@ def main(argv=None) -> int:
     oracle = run_seeds(base, seeds, args.workers)
     curves = [accuracy_curve(r.intention_hits, args.window) for r in bayes]
     windows = [describe([c[i] for c in curves]) for i in range(len(curves[0]))]
-    names = ["NAch", "NSoc", "NRes", "NEng"]
+    names = build_scenario(base).drive_names
     mb, mo = aggregate([r.metrics for r in bayes], names), aggregate([r.metrics for r in oracle], names)
     acc = {k: describe([r.metrics["intention_accuracy"][k] for r in bayes]) for k in ("first_500", "last_500")}
     print(f"accuracy per {args.window}-tick window (mean [95% interval] over {args.seeds} seeds):")

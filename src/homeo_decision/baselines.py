@@ -11,11 +11,11 @@ and a ``q`` attribute only when it keeps a Q-table. The policies:
 ``RandomPolicy``
     a uniformly random valid action (Table 3.3 constraints), from the ``policy`` stream.
 ``RulePolicy``
-    a hand-written fixed-priority threshold rule, the usual behaviour-tree answer:
-    charge when the battery need reaches its threshold (and keep charging down to a low
-    mark), else serve the expressed intention with the action the user wants, else rest,
-    else socialise, else idle. It knows the intention -> action mapping (a programmer
-    wrote it down) and never learns.
+    fixed-priority threshold rules, the usual behaviour-tree answer, written as data in the
+    scenario's ``rule_policy`` block (the thesis scenario's: charge when the battery need
+    reaches its threshold and keep charging down to a low mark, else serve the expressed
+    intention with the action the user wants, else rest, else socialise, else idle). It
+    knows the intention -> action mapping (a programmer wrote it down) and never learns.
 ``FlatQ``
     standard Q-learning (Eq 2.9) over the full Cartesian state of Eq 3.5/3.8,
     m_dom x S_hum x prod_o S_o, with no state reduction and no collateral term; the same
@@ -31,7 +31,6 @@ Every percept still carries the intensities and the dominant motivation (Eq 3.2-
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Sequence
 
 from .agent import DecisionCore, Learned, Perceiving, Percept
@@ -39,7 +38,7 @@ from .motivation import dod_weights
 from .objectq import phase_at, schedule_from, softmax_pick, softmax_probs
 from .reward import reward
 from .rng import UniformStream
-from .scenario import NULL_OBJECT, Scenario
+from .scenario import NULL_OBJECT, RuleSpec, Scenario, holds
 
 POLICIES = ("objectq", "random", "rule", "flatq", "nofeedback")
 
@@ -79,84 +78,54 @@ class RandomPolicy(_Perceiving):
         return valid[self.rng.index(len(valid))]
 
 
-@dataclass(frozen=True)
-class RuleSettings:
-    """Constants of the rule policy. ``None`` thresholds take the scenario's activation
-    thresholds (Table 3.1): the rule acts on a need exactly when the homeostatic robot's
-    motivation for it would be active."""
-
-    charge_at: float | None = None  # start charging when NEng >= this (None: NEng's threshold, 50)
-    charge_until: float = 10.0  # keep charging (Stay while charging) while NEng > this
-    rest_at: float | None = None  # rest when NRes >= this (None: NRes's threshold, 50)
-    chat_at: float | None = None  # chat when NSoc >= this (None: NSoc's threshold, 70)
-
-
 class RulePolicy(_Perceiving):
-    """Fixed-priority threshold rules for the thesis scenario (a behaviour-tree selector).
+    """Fixed-priority rules read from the scenario's ``rule_policy`` block (a behaviour-tree selector).
 
-    1. battery: NEng >= charge_at, or attached and NEng > charge_until ->
-       MoveToC if the charger is far, Attach if idle, Stay if charging;
-    2. serve: an intention is expressed -> its first valid desired action (Table 4.3);
-    3. rest: NRes >= rest_at -> Rest, or MoveToR first when the human is near;
-    4. socialise: NSoc >= chat_at and the human present -> Chat, or MoveToH first;
-    5. idle: Rest if allowed, else Chat, else the first valid action.
+    Rules are tried in order (``homeo_decision.scenario.rule_policy`` documents the block). A rule
+    fires when its drive is at or above its ``at`` (by default the drive's activation threshold,
+    Table 3.1: the rule acts on a need exactly when the homeostatic robot's motivation for it
+    would be active), or while its hysteresis condition holds, and its world condition holds. A
+    ``serve`` rule picks the first valid desired action of the expressed intention; any other
+    the first valid candidate whose condition holds. A rule that picks nothing falls through;
+    when no rule picks, the first valid action.
     """
 
-    NEEDED_ACTIONS = ("MoveToC", "Attach", "Stay", "Rest", "MoveToR", "Chat", "MoveToH")
-    NEEDED_DRIVES = ("NEng", "NRes", "NSoc")
-
-    def __init__(self, sc: Scenario, seed: int = 0, *, dod: float | None = None, xi: float | None = None,
-                 settings: RuleSettings | None = None):
+    def __init__(self, sc: Scenario, seed: int = 0, *, dod: float | None = None, xi: float | None = None):
         super().__init__(sc, seed, dod, xi)
-        missing = [a for a in self.NEEDED_ACTIONS if a not in sc.action_names]
-        missing += [d for d in self.NEEDED_DRIVES if d not in sc.drive_names]
-        if "charger" not in sc.objects:
-            missing.append("charger")
-        if missing:
-            raise ValueError(f"the rule policy is written for the thesis scenario; {sc.name!r} lacks {', '.join(missing)}")
-        s = settings or RuleSettings()
-        thr = {d.name: d.threshold for d in sc.drives}
-        self.settings = s
-        self.charge_at = thr["NEng"] if s.charge_at is None else float(s.charge_at)
-        self.charge_until = float(s.charge_until)
-        self.rest_at = thr["NRes"] if s.rest_at is None else float(s.rest_at)
-        self.chat_at = thr["NSoc"] if s.chat_at is None else float(s.chat_at)
-        names = sc.drive_names
-        self.i_eng, self.i_res, self.i_soc = names.index("NEng"), names.index("NRes"), names.index("NSoc")
-        self.a = {n: sc.action_index(n) for n in self.NEEDED_ACTIONS}
+        if sc.rule_policy is None:
+            raise ValueError(f"--policy rule: scenario {sc.source} has no 'rule_policy' block (docs/EXPERIMENTS.md)")
+        self.rules = sc.rule_policy
         c = sc.c
         self.desired = [tuple(c.action_ids[a] for a in it.desired) for it in sc.intentions]
         self.views = c.views
+        self.intention_of = c.intention_of
+
+    def _fires(self, rule: RuleSpec, d: Sequence[float], view: dict) -> bool:
+        if rule.when and not holds(rule.when, view):
+            return False
+        if rule.drive is None:
+            return True
+        x = d[rule.drive]
+        if x >= rule.at:
+            return True
+        # hysteresis: keep going (e.g. keep charging) while the world is so and the drive above a low mark
+        return rule.keep_when is not None and x > rule.keep_above and holds(rule.keep_when, view)
 
     def select(self, p: Percept, t: int) -> int:
-        v = self.views[p.code]
+        view = self.views[p.code]
         valid = self.valid[p.code]
-        a = self.a
-        d = p.drives
-        near_charger = v["charger.distance"] == "near"
-        charging = v["charger.status"] == "charging"
-        rel = v["human.relation"]
-        # 1. battery
-        if d[self.i_eng] >= self.charge_at or (charging and near_charger and d[self.i_eng] > self.charge_until):
-            if not near_charger:
-                return a["MoveToC"]
-            return a["Stay"] if charging else a["Attach"]
-        # 2. serve
-        it = self.sc.c.intention_of[p.code]
-        if it:
-            for act in self.desired[it - 1]:
-                if act in valid:
-                    return act
-        # 3. rest
-        if d[self.i_res] >= self.rest_at:
-            return a["Rest"] if a["Rest"] in valid else a["MoveToR"]
-        # 4. socialise
-        if d[self.i_soc] >= self.chat_at and rel != "absent":
-            return a["Chat"] if a["Chat"] in valid else a["MoveToH"]
-        # 5. idle
-        for act in (a["Rest"], a["Chat"]):
-            if act in valid:
-                return act
+        for rule in self.rules:
+            if not self._fires(rule, p.drives, view):
+                continue
+            if rule.serve:
+                it = self.intention_of[p.code]
+                for act in self.desired[it - 1] if it else ():
+                    if act in valid:
+                        return act
+                continue
+            for cand in rule.candidates:
+                if cand.action in valid and (not cand.when or holds(cand.when, view)):
+                    return cand.action
         return valid[0]
 
 

@@ -58,7 +58,7 @@ class DriveModel(DriveDynamics):
         self.serving_internal = sc.drives[sc.serving].source == "internal"
         self.praise = sc.praise_change
         self.scold = sc.open["scold_drive_change"]
-        self.growth = sc.open["nach_growth"]
+        self.growth = sc.open["serving_growth"]
         init = sc.open["initial_drives"]
         for i in self.body_idx:
             self.values[i] = clamp(float(init[i]))
@@ -78,7 +78,7 @@ class DriveModel(DriveDynamics):
         self.values[s] = clamp(self.values[s] + (self.praise if feedback > 0 else self.scold))
 
     def apply_time(self, expressed: bool = True, satisfied: bool = False) -> None:  # type: ignore[override]
-        """Table 4.2 growth; whether the serving drive grows on a tick is the open choice ``nach_growth``."""
+        """Table 4.2 growth; whether the serving drive grows on a tick is the open choice ``serving_growth``."""
         g = self.growth
         grow_serving = g == "always" or (g == "expressed" and expressed) or (g == "unsatisfied" and expressed and not satisfied)
         DriveDynamics.apply_time(self, -1 if grow_serving else self.serving)

@@ -24,13 +24,12 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from std_srvs.srv import Trigger
 
 from homeo_msgs_py.graph import NODES
-from homeo_msgs_py.lockstep import TickJoin
 from homeo_msgs_py.node_base import NodeConfigError
 
-from . import codec, qtable_io
+from . import qtable_io
 from .agent import DecisionCore
+from .hosts import DecisionHost
 from .node_runtime import ScenarioNode, run_scenario_node
-from .robot import Decision
 
 DESC = NODES["homeo_decision"]
 
@@ -58,7 +57,7 @@ class DecisionNode(ScenarioNode):
         p = lambda n: self.get_parameter(n).value  # noqa: E731
         self.core = DecisionCore(self.sc, p("seed"), dod=p("dod"), xi=p("xi"), gamma=p("gamma"),
                                  pseudo_update=p("pseudo_update"), feedback=p("feedback"))
-        self.decision = Decision(self.core)
+        self.host = DecisionHost(self.sc, self.core)
         self.q_path = p("q_table_path")
         if p("load_on_start"):
             ok, msg = self._load()
@@ -67,7 +66,6 @@ class DecisionNode(ScenarioNode):
             self.get_logger().info(msg)
         self.add_on_set_parameters_callback(self._on_params)
 
-        self.join = TickJoin(DESC.join_offsets(learning=True))
         self.pub = self.publisher("action", min_subs=1)
         self.subscribe("drives", lambda m: self._put("drives", m))
         self.create_service(Trigger, "~/save_q", self._on_save)
@@ -94,21 +92,9 @@ class DecisionNode(ScenarioNode):
         return SetParametersResult(successful=True)
 
     # -- ticks ----------------------------------------------------------------------------
-    def _put(self, name, msg) -> None:
-        run = self.join.run
-        done = self.join.put(name, msg)
-        if self.join.run != run:
-            self.decision.restart()
-        for k, inputs in done:
-            self._tick(k, inputs["drives"].fields)
-
-    def _tick(self, k: int, d: dict) -> None:
-        sc, core = self.sc, self.core
-        perceived, out, after, final = codec.perception_from_fields(sc, d)
-        a = self.decision.tick(k, perceived, out, after, final)
-        params = {"dod": core.dod, "xi": core.xi, "gamma": core.gamma, "feedback": core.use_feedback,
-                  "pseudo_update": core.pseudo}
-        self.send(self.pub, k, codec.action_fields(sc, a, d, core.phase(k).tau, params, final), self.join.run)
+    def _put(self, key, msg) -> None:
+        for k, fields in self.host.stage.put(key, msg):
+            self.send(self.pub, k, fields, self.host.stage.run)
 
     # -- services -------------------------------------------------------------------------
     def _load(self) -> tuple[bool, str]:
@@ -147,7 +133,7 @@ class DecisionNode(ScenarioNode):
 
     def _on_reset(self, request, response):
         self.core.reset()
-        self.decision.restart()
+        self.host.decision.restart()
         response.success, response.message = True, f"Q-table cleared, decision stream reseeded with {self.core.seed}"
         return response
 

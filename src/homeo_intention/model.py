@@ -19,7 +19,7 @@ from homeo_decision.scenario import OBS_CHANNELS, Scenario
 
 from .em import Params, run_em
 from .network import posterior_table, to_pgmpy
-from .observation import ObservationCoder, UnknownObservation
+from .observation import ObservationCoder
 
 
 @dataclass(slots=True)

@@ -20,14 +20,12 @@ from pathlib import Path
 from rcl_interfaces.msg import ParameterDescriptor
 from std_srvs.srv import Trigger
 
-from homeo_decision import codec
 from homeo_decision.node_runtime import ScenarioNode, run_scenario_node
 from homeo_msgs_py.graph import BAYES, INTENTION_MODES, NODES
-from homeo_msgs_py.lockstep import TickJoin
 from homeo_msgs_py.node_base import NodeConfigError
 from homeo_msgs_py.schemas import Rejected
 
-from .recognition import make_recognition
+from .recognition import RecognitionHost
 
 DESC = NODES["homeo_intention"]
 
@@ -40,40 +38,30 @@ class IntentionNode(ScenarioNode):
         self.declare_parameter("model_path", "", ParameterDescriptor(description="model file of ~/save_model, ~/load_model"))
         self.declare_parameter("load_on_start", False, ParameterDescriptor(
             description="load model_path when the node starts", read_only=True))
-        mode = self.mode = self.get_parameter("mode").value
+        mode = self.get_parameter("mode").value
         try:
-            self.part = make_recognition(mode, self.sc)
+            self.host = RecognitionHost(self.sc, mode)
+            self.part = self.host.part
         except ValueError as exc:  # unknown mode, or a scenario without observation alphabets
             raise NodeConfigError(f"parameter mode: {exc}") from None
         if self.get_parameter("load_on_start").value:
             ok, msg = self._load()
             if not ok:
                 raise NodeConfigError(f"load_on_start: {msg}")
-        learns = self.part.learns
-        self.join = TickJoin(DESC.join_offsets(learns))
         self.pub = self.publisher("intention")
-        for i in DESC.reads(learns):
+        for i in DESC.reads(self.part.learns):
             self.subscribe(i.topic, lambda m, key=i.topic: self._put(key, m))
         self.create_service(Trigger, "~/save_model", self._on_save)
         self.create_service(Trigger, "~/load_model", self._on_load)
 
     def _put(self, key, msg) -> None:
-        sc = self.sc
         if key == "observation":
             try:
-                self.part.check(codec.observation_from_fields(sc, None, msg.fields))
+                self.host.check(msg.fields)
             except ValueError as exc:  # an unknown symbol, or the oracle without the intention
                 raise Rejected(str(exc)) from None
-        run = self.join.run
-        done = self.join.put(key, msg)
-        if self.join.run != run:
-            self.part.restart()
-        for k, inputs in done:
-            out = codec.outcome_from_fields(sc, inputs["outcome"].fields) if "outcome" in inputs else None
-            r = self.part.tick(codec.observation_from_fields(sc, None, inputs["observation"].fields), out)
-            fields = {"intention": sc.intention_names[r.intention], "posterior": dict(zip(sc.intention_names, r.posterior)),
-                      "mode": self.mode}
-            self.send(self.pub, k, fields, self.join.run)
+        for k, fields in self.host.stage.put(key, msg):
+            self.send(self.pub, k, fields, self.host.stage.run)
 
     # -- services -------------------------------------------------------------------------
     def _path(self) -> str:

@@ -7,6 +7,7 @@ never read. ``make_recognition`` also gives the oracle (the thesis's own simulat
 
 from __future__ import annotations
 
+from homeo_decision import codec
 from homeo_decision.environment import Observation, Outcome
 from homeo_decision.robot import OracleRecognition
 from homeo_decision.scenario import OBS_CHANNELS, Scenario
@@ -50,3 +51,27 @@ def make_recognition(mode: str, sc: Scenario, **settings):
     if mode == BAYES:
         return BayesRecognition(sc, **settings)
     raise ValueError(f"unknown intention mode {mode!r}; known: {', '.join(INTENTION_MODES)}")
+
+
+class RecognitionHost:
+    """``homeo_intention`` without ROS: observation(k) (+ outcome(k-1) when learning) -> intention(k)."""
+
+    def __init__(self, sc: Scenario, mode: str, **settings):
+        from homeo_msgs_py.graph import NODES
+        from homeo_msgs_py.lockstep import JoinedStage
+
+        self.sc, self.mode = sc, mode
+        self.part = make_recognition(mode, sc, **settings)
+        self.offsets = NODES["homeo_intention"].join_offsets(self.part.learns)
+        self.stage = JoinedStage(self.offsets, self._tick, self.part.restart)
+
+    def check(self, fields: dict) -> None:
+        """Raises ValueError for an observation this mode cannot use (before it joins a tick)."""
+        self.part.check(codec.observation_from_fields(self.sc, None, fields))
+
+    def _tick(self, k: int, inputs: dict) -> dict:
+        sc = self.sc
+        out = codec.outcome_from_fields(sc, inputs["outcome"]) if "outcome" in inputs else None
+        r = self.part.tick(codec.observation_from_fields(sc, None, inputs["observation"]), out)
+        names = sc.intention_names
+        return {"intention": names[r.intention], "posterior": dict(zip(names, r.posterior)), "mode": self.mode}

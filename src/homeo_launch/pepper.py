@@ -148,7 +148,7 @@ def _die_with_parent() -> None:  # runs in the child before exec
 def scenario_file(path: str | None, out_dir: Path, continue_schedule: bool) -> str:
     """The scenario the nodes load: the given (or thesis) one; with ``continue_schedule`` its
     learning schedule is reduced to the last phase (the robot continues after its training)."""
-    from homeo_sim.scenarios import default_scenario_path
+    from homeo_decision.scenarios import default_scenario_path
 
     if not continue_schedule:
         return os.path.abspath(path) if path else ""

@@ -1,4 +1,4 @@
-"""``homeo-launch``: the whole node graph as separate processes, from one command.
+"""``homeo-launch sim``: the whole node graph as separate processes, from one command.
 
     homeo-launch sim [--iterations N (0 = until Ctrl-C)] [--rate HZ] [--seed S] [--dod X] [--xi X]
                      [--no-pseudo] [--scenario FILE] [--set KEY=VALUE] [--load-q FILE] [--save-q FILE]
@@ -14,28 +14,21 @@ its exit code and the rest are stopped.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import sys
 import time
 from dataclasses import dataclass
 
-from homeo_decision.qtable_io import QTableError
-from homeo_decision.scenario import ScenarioError
-from homeo_msgs_py.cli_args import Parser, UserError, float_in, int_at_least, setting
-from homeo_msgs_py.graph import BAYES, GRAPHS, INTENTION_MODES, NODES, ORACLE, TOPICS, endpoints
+from homeo_msgs_py.cli_args import UserError
+from homeo_msgs_py.graph import BAYES, GRAPHS, NODES, endpoints
 from homeo_sim.cli import format_table, run_output
 from homeo_sim.stats import json_safe
 
+from .monitor import DISCOVERY_TIMEOUT_S, GraphError, Monitor, check_alive, wait_until_up
 from .processes import Graph, NodeSpec, dds_defaults, graph_env
 
 PROG = "homeo-launch"
-DISCOVERY_TIMEOUT_S = 60.0
-
-
-class GraphError(Exception):
-    """The graph failed: a node died or never came up. Exit code 1."""
 
 
 @dataclass
@@ -74,89 +67,6 @@ def sim_specs(o: SimOptions) -> list[NodeSpec]:
     params = {"homeo_sim": sim, "homeo_intention": dict(common, mode=o.intention), "homeo_drives": dict(common),
               "homeo_decision": decision}
     return [NodeSpec(n, NODES[n].module, params[n]) for n in GRAPHS["sim"]]
-
-
-class Monitor:
-    """The launcher's own node: watches discovery, /homeo/run_status, and calls services."""
-
-    def __init__(self):
-        import rclpy
-        from rclpy.signals import SignalHandlerOptions
-        from std_msgs.msg import String
-
-        from homeo_msgs_py.qos import sub_qos
-        from homeo_msgs_py.schemas import Rejected, Vocabulary, decode
-
-        rclpy.init(signal_handler_options=SignalHandlerOptions.NO)  # Ctrl-C stays a KeyboardInterrupt here
-        self.rclpy = rclpy
-        self.node = rclpy.create_node("homeo_launch")
-        self.status = None
-        voc = Vocabulary()
-
-        def on_status(msg: String) -> None:
-            try:
-                self.status = decode(msg.data, voc, "homeo/run_status")
-            except Rejected:
-                pass
-
-        self.node.create_subscription(String, TOPICS["run_status"].name, on_status, sub_qos("run_status"))
-
-    def spin(self, timeout: float = 0.05) -> None:
-        self.rclpy.spin_once(self.node, timeout_sec=timeout)
-
-    def missing(self, nodes, endpoints) -> list[str]:
-        present = set(self.node.get_node_names())
-        out = [f"node {n}" for n in nodes if n not in present]
-        for key, (w, r) in endpoints.items():
-            topic = TOPICS[key].name
-            nw, nr = self.node.count_publishers(topic), self.node.count_subscribers(topic)
-            if nw < w:
-                out.append(f"{topic}: {nw}/{w} writers")
-            if nr < r:
-                out.append(f"{topic}: {nr}/{r} readers")
-        return out
-
-    def call_trigger(self, service: str, timeout: float = 10.0) -> tuple[bool, str]:
-        from std_srvs.srv import Trigger
-
-        cli = self.node.create_client(Trigger, service)
-        try:
-            if not cli.wait_for_service(timeout_sec=timeout):
-                return False, f"service {service} is not available"
-            fut = cli.call_async(Trigger.Request())
-            end = time.monotonic() + timeout
-            while not fut.done() and time.monotonic() < end:
-                self.spin(0.05)
-            if not fut.done():
-                return False, f"service {service} did not answer within {timeout:g} s"
-            res = fut.result()
-            return res.success, res.message
-        finally:
-            self.node.destroy_client(cli)
-
-    def close(self) -> None:
-        self.node.destroy_node()
-        self.rclpy.try_shutdown()
-
-
-def wait_until_up(graph: Graph, mon: Monitor, nodes, endpoints, bound: float) -> None:
-    end = time.monotonic() + bound
-    while True:
-        check_alive(graph)
-        missing = mon.missing(nodes, endpoints)
-        if not missing:
-            return
-        if time.monotonic() > end:
-            raise GraphError(f"the graph did not come up within {bound:g} s; missing: {'; '.join(missing)}")
-        mon.spin(0.1)
-
-
-def check_alive(graph: Graph) -> None:
-    dead = graph.dead()
-    if dead:
-        name, code = dead
-        tail = graph.log_tail(name)
-        raise GraphError(f"node {name} exited with code {code}" + (f"; its last output:\n{tail}" if tail else ""))
 
 
 def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on_progress=None,
@@ -232,41 +142,6 @@ def _set_param(mon: Monitor, node: str, name: str, value) -> tuple[bool, str]:
         mon.node.destroy_client(cli)
 
 
-# -- command line -----------------------------------------------------------------------------
-def build_parser() -> argparse.ArgumentParser:
-    ap = Parser(prog=PROG, description="Start the homeostatic robot's ROS 2 node graph.")
-    sub = ap.add_subparsers(dest="cmd", required=True, parser_class=Parser)
-    s = sub.add_parser("sim", help="the graph with the simulated world and human; prints Table 4.5's metrics")
-    s.add_argument("--iterations", type=int_at_least(0), default=5000, help="ticks (0 = until Ctrl-C; default 5000)")
-    s.add_argument("--rate", type=float_in(0.0, 1000.0), default=0.0, help="ticks per second (0 = as fast as lockstep allows)")
-    s.add_argument("--seed", type=int_at_least(0), default=0, help="seed of every component (default 0)")
-    s.add_argument("--dod", type=float_in(0.0, 1.0), default=None, help="Degree of Dedication (Eq 3.27)")
-    s.add_argument("--xi", type=float_in(0.0, 1000.0), default=None, help="motivation factor xi (Eq 3.20)")
-    s.add_argument("--no-pseudo", action="store_true", help="switch off pseudo updates (Eq 3.23)")
-    s.add_argument("--intention", choices=INTENTION_MODES, default=BAYES,
-                   help="recognise the intention with the Bayesian network (default) or observe it (the thesis's "
-                        "simulation; what homeo-sim run does by default)")
-    s.add_argument("--scenario", metavar="FILE", default=None, help="scenario JSON (default: the thesis scenario)")
-    s.add_argument("--set", metavar="KEY=VALUE", type=setting, action="append", default=[],
-                   help="override an open choice of the scenario")
-    s.add_argument("--load-q", metavar="FILE", help="start from a saved Q-table")
-    s.add_argument("--save-q", metavar="FILE", help="save the Q-table at the end")
-    s.add_argument("--trace", metavar="FILE", help="the simulation writes one JSON line per tick")
-    s.add_argument("--action-timeout", type=float_in(0.01, 3600.0), default=5.0,
-                   help="seconds to wait for an action before the tick counts as none (default 5)")
-    s.add_argument("--log-dir", metavar="DIR", help="keep each node's log here (default: a temporary directory)")
-    s.add_argument("--json", action="store_true", help="print the metrics as homeo-sim run --json does")
-    s.add_argument("--quiet", action="store_true", help="no progress bar")
-    from .pepper import add_parser as add_pepper
-
-    add_pepper(sub)
-    b = sub.add_parser("bench", help="seconds per tick of the graph against a raw rclpy chain (the floor)")
-    b.add_argument("--iterations", type=int_at_least(10), default=1000, help="ticks of each (default 1000)")
-    b.add_argument("--rounds", type=int_at_least(1), default=3, help="alternating graph/floor pairs (default 3)")
-    b.add_argument("--json", action="store_true")
-    return ap
-
-
 def options_from_args(a) -> SimOptions:
     from homeo_decision.scenario import load_scenario
 
@@ -330,39 +205,3 @@ def cmd_sim(a) -> int:
     return code
 
 
-def _sigterm_as_interrupt(signum, frame):
-    raise KeyboardInterrupt  # `kill` or a CI timeout stops the nodes as Ctrl-C does
-
-
-def main(argv=None) -> int:
-    import signal
-
-    signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
-    ap = build_parser()
-    try:
-        args = ap.parse_args(argv)
-        if args.cmd == "sim":
-            return cmd_sim(args)
-        if args.cmd == "pepper":
-            from .pepper import cmd_pepper
-
-            return cmd_pepper(args)
-        from .bench import cmd_bench
-
-        return cmd_bench(args)
-    except (UserError, ScenarioError, QTableError) as exc:
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
-        return 2
-    except GraphError as exc:
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
-        return 1
-    except BrokenPipeError:
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 141
-    except KeyboardInterrupt:
-        print(f"{PROG}: interrupted", file=sys.stderr)
-        return 130
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -263,3 +263,25 @@ class LockstepDriver:
             fields.setdefault("extra", {})
             fields["extra"] = dict(fields["extra"] or {}, elapsed_s=self.elapsed, ticks=self.tick)
         return fields
+
+
+class JoinedStage:
+    """A robot part as a node hosts it: its inputs join into ticks (``TickJoin``), a newer run
+    restarts it, and each completed tick becomes the fields the node publishes. ROS-free, so the
+    nodes and the tests' in-memory bus run the very same code."""
+
+    def __init__(self, offsets: dict, tick: Callable[[int, dict], dict], restart: Callable[[], None]):
+        self.join = TickJoin(offsets)
+        self._tick, self._restart = tick, restart
+
+    @property
+    def run(self) -> int:
+        return self.join.run
+
+    def put(self, key: str, msg: Message) -> list[tuple[int, dict]]:
+        """Take one input (raises Rejected); returns ``(tick, fields to publish)`` per completed tick."""
+        run = self.join.run
+        done = self.join.put(key, msg)
+        if self.join.run != run:
+            self._restart()
+        return [(k, self._tick(k, {name: m.fields for name, m in inputs.items()})) for k, inputs in done]

@@ -104,15 +104,18 @@ class HomeoNode(Node):
     def subscribe(self, key: str, handler: Callable[[Message], None]):
         """``handler`` gets validated messages of topic ``key``; bad ones are dropped with a reason
         and counted. Handlers raise :class:`Rejected` for messages valid alone but not here (stale)."""
-        topic, schema = TOPICS[key].name, TOPICS[key].schema
+        schema = TOPICS[key].schema
+        where = [TOPICS[key].name]
 
         def cb(msg: String) -> None:
             try:
                 handler(decode(msg.data, self.voc, schema))
             except Rejected as exc:
-                self.reject(topic, str(exc))
+                self.reject(where[0], str(exc))
 
-        return self.create_subscription(String, topic, cb, sub_qos(key), event_callbacks=quiet_sub_events())
+        sub = self.create_subscription(String, TOPICS[key].name, cb, sub_qos(key), event_callbacks=quiet_sub_events())
+        where[0] = sub.topic_name  # reported fully resolved, namespace included
+        return sub
 
     def reject(self, topic: str, reason: str) -> None:
         self.rejects.reject(topic, reason)

@@ -32,7 +32,6 @@ from homeo_msgs_py.graph import BAYES, INTENTION_MODES, ORACLE
 
 from .runner import RunConfig, build_scenario, run_episode, run_seeds
 from .stats import aggregate, describe, json_safe
-from .thesis_values import TABLE_4_5
 
 PROG = "homeo-sim"
 
@@ -135,6 +134,8 @@ def cmd_run(args) -> int:
     for f, what in ((cfg.load_q, "Q-table"), (cfg.load_intention, "intention model")):
         if f and not Path(f).is_file():
             raise UserError(f"{what} file not found: {f}")
+    if cfg.policy == "rule" and sc.rule_policy is None:
+        raise UserError(f"--policy rule: scenario {sc.source} has no 'rule_policy' block (docs/EXPERIMENTS.md)")
     if cfg.intention == BAYES and sc.observations is None:
         raise UserError(f"--intention bayes: scenario {sc.source} has no 'observations' block (docs/INTENTION.md)")
     if cfg.load_intention:
@@ -167,7 +168,7 @@ def cmd_run(args) -> int:
     if args.json:
         print(json.dumps(json_safe(out)))
     else:
-        print(format_table(out, sc.drive_names, sc.name))
+        print(format_table(out, sc.drive_names, sc.name, sc.reference.metrics if sc.reference else None))
     return 0
 
 
@@ -182,8 +183,11 @@ def run_output(iterations: int, seeds: list, per_seed: list[dict], drive_names) 
     return out
 
 
-def format_table(out: dict, drive_names, scenario_name: str) -> str:
+def format_table(out: dict, drive_names, scenario_name: str, reference: dict | None = None) -> str:
+    """The metrics as text, with a column of published values when the scenario has a reference block."""
     m = out["metrics"]
+    ref_of = lambda key, dn=None: (reference.get(key) if dn is None else reference.get(key, {}).get(dn)) if reference else None  # noqa: E731
+    col = lambda v: f"  {'' if v is None else f'{v:7.2f}':>7}" if reference else ""  # noqa: E731
     n = len(out["seeds"])
     lines = [f"scenario {scenario_name}: {out['iterations']} iterations x {n} seed{'s' if n > 1 else ''}"
              + ("  (mean [95% interval])" if n > 1 else "")]
@@ -194,13 +198,12 @@ def format_table(out: dict, drive_names, scenario_name: str) -> str:
         return f"{d['mean']:7.3f}"
 
     w = 28 if n > 1 else 8
-    lines.append(f"{'metric':<10}{'drive':<6} {'ours':>{w}}  {'thesis':>7}")
+    lines.append(f"{'metric':<10}{'drive':<6} {'ours':>{w}}" + (f"  {'thesis':>7}" if reference else ""))
     for key in ("HSR", "RSR"):
-        lines.append(f"{key:<10}{'':<6} {cell(m[key]):>{w}}  {TABLE_4_5[key]:7.2f}")
+        lines.append(f"{key:<10}{'':<6} {cell(m[key]):>{w}}" + col(ref_of(key)))
     for key in ("CDA", "CEDA"):
         for dn in list(drive_names) + ["all"]:
-            ref = TABLE_4_5[key].get(dn)
-            lines.append(f"{key:<10}{dn:<6} {cell(m[key][dn]):>{w}}  {'' if ref is None else f'{ref:7.2f}':>7}")
+            lines.append(f"{key:<10}{dn:<6} {cell(m[key][dn]):>{w}}" + col(ref_of(key, dn)))
     for key, d in out.get("intention_accuracy", {}).items():
         lines.append(f"{'accuracy':<10}{key.replace('_', ' '):<6} {cell(d):>{w}}")
     return "\n".join(lines)
@@ -230,19 +233,22 @@ def cmd_sweep(args) -> int:
         from . import report
 
         (out_dir / f"sweep-{args.param}.json").write_text(json.dumps(json_safe(out)))
+        st = sc.reference.statements if sc.reference is not None else None  # published values to draw, if any
         if args.param == "xi":
-            report.fig_xi(out_dir / "fig4_3_xi.png", out["points"])
+            report.fig_xi(out_dir / "fig4_3_xi.png", out["points"], st)
         elif args.param == "dod":
-            report.fig_dod(out_dir / "fig4_5_dod.png", out["points"], sc.drive_names)
+            report.fig_dod(out_dir / "fig4_5_dod.png", out["points"], sc.drive_names, st)
         else:
-            report.fig_pseudo(out_dir / "fig4_4_pseudo.png", raw[0], raw[1], sc.drive_names[sc.serving])
-            report.fig_pseudo(out_dir / "fig4_4_pseudo_early.png", raw[0], raw[1], sc.drive_names[sc.serving], until=1000)
+            other = st["pseudo_unaffected_drive"] if st else None
+            report.fig_pseudo(out_dir / "fig4_4_pseudo.png", raw[0], raw[1], sc.drive_names[sc.serving], other=other)
+            report.fig_pseudo(out_dir / "fig4_4_pseudo_early.png", raw[0], raw[1], sc.drive_names[sc.serving], until=1000,
+                              other=other)
     if args.json:
         print(json.dumps(json_safe(out)))
     else:
         print(f"sweep {args.param}: {args.iterations} iterations x {args.seeds} seeds per point"
               + ("  (mean [95% interval])" if args.seeds > 1 else ""))
-        print(format_sweep(out, args.seeds))
+        print(format_sweep(out, args.seeds, sc.drive_names[sc.serving]))
     return 0
 
 

@@ -3,7 +3,7 @@
 Algorithm 2 line 9 reads "intention != null" where the text means "== null": no
 intention, no feedback. Settings the thesis leaves open (scenario ``open``):
 ``human_no_intention_prob`` (a new draw is "no intention"), ``human_leave_prob`` /
-``human_return_prob`` (presence), ``human_leave_proposal`` and ``human_proposal_prob``.
+``human_return_prob`` (presence), ``human_proposal_choice`` and ``human_proposal_prob``.
 
 For intention recognition (Section 2.3, docs/INTENTION.md) the human also shows what it
 wants: ``observe`` emits a gesture, a movement and a spoken keyword drawn from its personal
@@ -41,7 +41,7 @@ class SimHuman:
         self.p_leave = o["human_leave_prob"]
         self.p_return = o["human_return_prob"]
         self.p_propose = o["human_proposal_prob"]
-        self.leave_rule = o["human_leave_proposal"]
+        self.proposal_choice = o["human_proposal_choice"]  # which desired action a proposal names
         self.desired = sc.c.desired
         self.desired_order = [()] + [tuple(sc.c.action_ids[a] for a in it.desired) for it in sc.intentions]
         self.reasonable = sc.c.reasonable
@@ -91,7 +91,7 @@ class SimHuman:
         proposal = None
         if self.rng.random() < self.p_propose:
             options = self.desired_order[it]
-            rule = self.leave_rule
+            rule = self.proposal_choice
             if len(options) == 1 or rule == "first":
                 proposal = options[0]
             elif rule == "random":

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field, replace
 from typing import Callable, Iterable, TextIO
 
 from homeo_decision import qtable_io
-from homeo_decision.robot import OracleRecognition, Robot, run_loop
+from homeo_decision.robot import Robot, run_loop
 from homeo_decision.scenario import Scenario, load_scenario
 from homeo_msgs_py.graph import BAYES, ORACLE
 

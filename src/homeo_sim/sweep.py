@@ -214,18 +214,19 @@ def sweep(param: str, base: RunConfig, seeds: Iterable[int], workers: int | None
     return {"param": param, "points": points}, raw
 
 
-def format_sweep(out: dict, n_seeds: int) -> str:
-    """A text table of a sweep: mean [95% interval] of the headline metrics per point."""
+def format_sweep(out: dict, n_seeds: int, serving: str) -> str:
+    """A text table of a sweep: mean [95% interval] of the headline metrics per point (and the
+    CDA of the scenario's serving drive)."""
     def cell(d):
         return f"{d['mean']:6.3f} [{d['ci95'][0]:6.3f},{d['ci95'][1]:6.3f}]" if n_seeds > 1 else f"{d['mean']:6.3f}"
 
     w = 23 if n_seeds > 1 else 6
-    head = f"{out['param']:>7}  " + "  ".join(f"{h:>{w}}" for h in ("HSR", "RSR", "CDA all", "CEDA all", "CDA NAch"))
+    head = f"{out['param']:>7}  " + "  ".join(f"{h:>{w}}" for h in ("HSR", "RSR", "CDA all", "CEDA all", f"CDA {serving}"))
     lines = [head]
     for p in out["points"]:
         m = p["metrics"]
         v = p["value"]
         vs = ("on" if v else "off") if isinstance(v, bool) else f"{v:g}"
-        cells = [m["HSR"], m["RSR"], m["CDA"]["all"], m["CEDA"]["all"], m["CDA"]["NAch"]]
+        cells = [m["HSR"], m["RSR"], m["CDA"]["all"], m["CEDA"]["all"], m["CDA"][serving]]
         lines.append(f"{vs:>7}  " + "  ".join(f"{cell(c):>{w}}" for c in cells))
     return "\n".join(lines)

@@ -1,46 +1,43 @@
-"""The scenario file: drives, objects, actions, constraints, effects, stimuli, intentions.
+"""Loading and validation of a scenario file; every malformed part is a one-line ScenarioError.
 
-A scenario is data (JSON), validated on load and *compiled* into flat lookup tables so
-that the per-tick work is a handful of list indexings. Every world the scenario can be
-in is a small integer, the *world code*: a mixed-radix number over the base variables
-(robot location, human presence, intention, each object variable). Derived variables
-(an object's or the human's distance to the robot) are computed from the base ones.
-
-Conditions (`requires`, `when`, `reasonable`) are ``{variable: [values]}``; a value
-written ``"!x"`` means "anything but x". All listed variables must hold (AND).
+``load_scenario`` reads a JSON file (the shipped thesis scenario by default),
+``scenario_from_dict`` validates a parsed one and hands it to ``compile.py``. ``OPEN_CHOICES``
+lists the choices the thesis leaves open (docs/FIDELITY.md), with defaults and allowed values.
 """
 
 from __future__ import annotations
 
-import hashlib
-import itertools
 import json
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
-SCHEMA = "homeo-scenario"
-SCHEMA_VERSION = 1
-NONE_INTENTION = "none"
-NULL_OBJECT = "null"
-PRESENCE = ("present", "absent")
-RELATIONS = ("near", "far", "absent")
-DISTANCES = ("near", "far")
+from .compile import _compile
+from .model import (NONE_INTENTION, NULL_OBJECT, OBS_CHANNELS, PRESENCE, RELATIONS, DISTANCES, SCHEMA,
+                    SCHEMA_VERSION, ActionSpec, DriveSpec, IntentionSpec, ObservationSpec, Scenario, ScenarioError)
+from .reference import parse_reference
+from .rule_policy import parse_rule_policy
 
-# Choices the thesis leaves open, with their defaults and allowed values (None = any
-# number in the given range). docs/FIDELITY.md explains each.
+ANY_ACTION = "<action>"  # in OPEN_CHOICES: any action name of the scenario is allowed too
+
+# Choices the thesis leaves open, with their defaults and allowed values (a pair of floats =
+# any number in that range; ANY_ACTION = also any action name of the scenario). docs/FIDELITY.md explains each.
 OPEN_CHOICES: dict[str, tuple[Any, Any]] = {
     "initial_q": (0.0, (-1e6, 1e6)),
     "scold_drive_change": (0.0, (-100.0, 100.0)),
-    "nach_growth": ("always", ("always", "expressed", "unsatisfied")),
+    # does the serving drive grow every tick, only while an intention is expressed, or only while
+    # one is expressed and not yet satisfied (Table 4.2)
+    "serving_growth": ("always", ("always", "expressed", "unsatisfied")),
     "reward_span": ("iteration", ("iteration", "action")),
-    "leaving_charger_detaches": (True, (True, False)),
+    # whether objects' on_leave settings apply when the robot leaves their location
+    "on_leave_effects": (True, (True, False)),
     "tie_break": ("first", ("first", "last")),
     "value_max_over": ("all", ("all", "valid")),
     "human_no_intention_prob": (0.0, (0.0, 1.0)),
     "human_leave_prob": (0.0, (0.0, 1.0)),
     "human_return_prob": (1.0, (0.0, 1.0)),
-    "human_leave_proposal": ("first", ("first", "MoveToR", "MoveToC", "random")),
+    # which desired action the human proposes when its intention has several: the first, a random
+    # one, or a named action (when it is among the desired ones, else the first)
+    "human_proposal_choice": ("first", ("first", "random", ANY_ACTION)),
     "human_proposal_prob": (1.0, (0.0, 1.0)),
     "metrics_sample": ("end", ("end", "after_action")),
     # intention recognition (Section 2.3; docs/INTENTION.md): the recogniser and the simulated user
@@ -52,194 +49,17 @@ OPEN_CHOICES: dict[str, tuple[Any, Any]] = {
     "keyword_noise": (0.0, (0.0, 1.0)),
 }
 
-# Observed children of the hidden intention in the Bayesian network (Section 2.3, Fig 2.3).
-OBS_CHANNELS = ("gesture", "movement", "keyword")
-
-
-class ScenarioError(ValueError):
-    """A scenario file that cannot be used; the message says where and why."""
-
-
-@dataclass(frozen=True)
-class DriveSpec:
-    name: str
-    motivation: str
-    threshold: float
-    rate: float
-    source: str  # "internal" (computed by the robot) or "body" (read from the body)
-
-
-@dataclass(frozen=True)
-class ActionSpec:
-    name: str
-    obj: str
-    requires: dict
-    effects: tuple  # of dicts: {"when": cond, "set": {...}, "drives": {...}}
-
-
-@dataclass(frozen=True)
-class IntentionSpec:
-    name: str
-    desired: tuple
-    reasonable: dict
-
-
-@dataclass(frozen=True)
-class ObservationSpec:
-    """The scenario's ``observations`` block: alphabets, the network's prior and the user's habits.
-
-    ``prior`` and ``habits`` map a channel to one distribution over its alphabet per intention
-    (``Scenario.intention_names`` order, ``none`` first): P0(symbol | intention) for the
-    network, and how the simulated user actually expresses each intention.
-    """
-
-    alphabets: dict  # channel -> tuple of symbols
-    prior_intention: tuple  # P0(intention)
-    prior: dict  # channel -> tuple (per intention) of tuple (per symbol)
-    habits: dict  # channel -> same shape as prior
-
-    def layout(self) -> dict:
-        """What a saved intention model must agree with (besides the intentions)."""
-        return {ch: list(self.alphabets[ch]) for ch in OBS_CHANNELS}
-
-
-@dataclass
-class Scenario:
-    """A validated scenario plus its compiled tables (see module docstring)."""
-
-    name: str
-    raw: dict
-    drives: tuple
-    serving: int
-    locations: tuple
-    human_location: str
-    resting_place: str
-    objects: dict  # name -> {"location": str|None, "variables": {var: [values]}, "on_leave": {...}}
-    stimuli: tuple
-    actions: tuple
-    intentions: tuple
-    feedback_value: float
-    praise_change: float
-    learning: dict
-    open: dict
-    source: str = "<memory>"
-    # compiled
-    base_vars: tuple = ()
-    base_values: tuple = ()
-    n_codes: int = 0
-    c: "Compiled" = field(default=None, repr=False)  # type: ignore[assignment]
-    observations: ObservationSpec | None = None  # None: the scenario cannot run intention recognition
-
-    # -- names ---------------------------------------------------------------
-    @property
-    def drive_names(self) -> list[str]:
-        return [d.name for d in self.drives]
-
-    @property
-    def motivation_names(self) -> list[str]:
-        return [d.motivation for d in self.drives]
-
-    @property
-    def action_names(self) -> list[str]:
-        return [a.name for a in self.actions]
-
-    @property
-    def intention_names(self) -> list[str]:
-        """Intentions as the robot perceives them: ``none`` first."""
-        return [NONE_INTENTION] + [i.name for i in self.intentions]
-
-    @property
-    def object_names(self) -> list[str]:
-        """Objects with a Q-table, the ``null`` object last (Eq 3.12)."""
-        return list(self.objects) + [NULL_OBJECT]
-
-    def action_index(self, name: str) -> int:
-        try:
-            return self.c.action_ids[name]
-        except KeyError:
-            raise ScenarioError(f"unknown action {name!r}; known: {', '.join(self.action_names)}") from None
-
-    def fingerprint(self) -> str:
-        """Hash of what a Q-table depends on (drives, intentions, objects' states/actions)."""
-        blob = json.dumps(self.q_layout(), sort_keys=True).encode()
-        return hashlib.sha256(blob).hexdigest()[:16]
-
-    def q_layout(self) -> dict:
-        """Labels of every Q-table axis: what a saved table must agree with."""
-        c = self.c
-        return {
-            "motivations": self.motivation_names,
-            "intentions": self.intention_names,
-            "relations": list(RELATIONS),
-            "objects": {
-                o: {"states": list(c.obj_state_labels[k]), "actions": [self.actions[a].name for a in c.obj_actions[k]]}
-                for k, o in enumerate(self.object_names)
-            },
-        }
-
-    # -- observations --------------------------------------------------------
-    def encode(self, values: Mapping[str, str]) -> int:
-        """World code of a full assignment of the base variables."""
-        code = 0
-        for var, vals in zip(self.base_vars, self.base_values):
-            v = values.get(var)
-            if v not in vals:
-                raise ScenarioError(f"{var} = {v!r} is not one of {list(vals)}")
-            code = code * len(vals) + vals.index(v)
-        return code
-
-    def decode(self, code: int) -> dict[str, str]:
-        out = {}
-        for var, vals in reversed(list(zip(self.base_vars, self.base_values))):
-            code, r = divmod(code, len(vals))
-            out[var] = vals[r]
-        return dict(reversed(list(out.items())))
-
-    def view(self, code: int) -> dict[str, str]:
-        """Base and derived variables of a world code."""
-        return dict(self.c.views[code])
-
-
-@dataclass
-class Compiled:
-    """Lookup tables indexed by world code (and action / object index)."""
-
-    action_ids: dict
-    views: list  # code -> dict of all variables
-    stim: list  # code -> tuple of per-motivation stimulus sums (Eq 3.2)
-    stim_names: list  # code -> tuple of present stimulus names
-    valid: list  # code -> tuple of valid action ids (Table 3.3 constraints)
-    valid_local: list  # code -> tuple per object of valid local action indices
-    next_code: list  # code -> tuple per action of the world code after its effects
-    drive_delta: list  # code -> tuple per action of tuple per drive of the change (Table 4.1)
-    hum: list  # code -> index of S_hum = intention x relation (Eq 3.9)
-    obj_state: list  # code -> tuple per object of its state index (Eq 3.24-3.26)
-    obj_state_labels: list  # object -> tuple of state labels
-    obj_actions: list  # object -> tuple of action ids (A_o)
-    act_obj: tuple  # action -> object index
-    act_local: tuple  # action -> index within A_o
-    intention_of: list  # code -> intention index (0 = none)
-    relation_of: list  # code -> relation index
-    location_of: list  # code -> location index
-    presence_of: list  # code -> 0 present / 1 absent
-    with_intention: list  # code -> tuple per intention index of the code with that intention
-    with_presence: list  # code -> tuple per presence index
-    reasonable: list  # code -> tuple of intention indices reasonable there (human side)
-    desired: tuple  # intention index -> frozenset of action ids
-    n_hum: int
-
-
-# ---------------------------------------------------------------------------
-# loading and validation
-
 
 def load_scenario(path: str | Path | None = None, overrides: Mapping[str, Any] | None = None) -> Scenario:
-    """Load, validate and compile a scenario file (the thesis scenario by default)."""
-    if path is None:
-        from homeo_sim.scenarios import default_scenario_path
+    """Load, validate and compile a scenario file (the thesis scenario by default; a bare name such as
+    ``workshop`` is a file shipped in ``homeo_decision/scenarios``)."""
+    from homeo_decision.scenarios import SCENARIO_DIR, default_scenario_path
 
+    if path is None:
         path = default_scenario_path()
     p = Path(path)
+    if not p.exists() and p.name == str(path) and not p.suffix and (SCENARIO_DIR / f"{p}.json").is_file():
+        p = SCENARIO_DIR / f"{p}.json"  # a bare name: a scenario shipped with the package
     try:
         text = p.read_text()
     except FileNotFoundError:
@@ -454,6 +274,11 @@ def _scenario_from_dict(raw: Any, source: str, overrides: Mapping[str, Any] | No
     observations = None
     if "observations" in raw:
         observations = _parse_observations(raw["observations"], [NONE_INTENTION] + [i.name for i in intentions], where)
+    action_ids = {a.name: k for k, a in enumerate(actions)}
+    rule_policy = None
+    if "rule_policy" in raw:
+        rule_policy = parse_rule_policy(raw["rule_policy"], drives, action_ids, check_cond, where)
+    reference = parse_reference(raw["reference"], dnames, where) if "reference" in raw else None
 
     sc = Scenario(
         name=str(raw.get("name", Path(source).stem)),
@@ -475,6 +300,8 @@ def _scenario_from_dict(raw: Any, source: str, overrides: Mapping[str, Any] | No
         base_vars=tuple(base_vars),
         base_values=tuple(tuple(v) for v in base_values),
         observations=observations,
+        rule_policy=rule_policy,
+        reference=reference,
     )
     _compile(sc)
     return sc
@@ -583,11 +410,14 @@ def _check_open(open_: dict, dnames, objects, base_vars, all_vars, anames, where
             if not isinstance(val, (int, float)) or isinstance(val, bool) or not allowed[0] <= val <= allowed[1]:
                 raise ScenarioError(f"{where}: open.{key} = {val!r} must be a number in [{allowed[0]}, {allowed[1]}]")
             val = float(val)
+        elif ANY_ACTION in allowed:
+            named = [x for x in allowed if x != ANY_ACTION]
+            if not isinstance(val, str) or (val not in named and val not in anames):
+                raise ScenarioError(f"{where}: open.{key} = {val!r} must be one of {named} or an action name "
+                                    f"({', '.join(sorted(anames))})")
         elif val not in allowed or isinstance(val, bool) != isinstance(allowed[0], bool):
             raise ScenarioError(f"{where}: open.{key} = {val!r} must be one of {list(allowed)}")
         out[key] = val
-    if out["human_leave_proposal"] in ("MoveToR", "MoveToC") and out["human_leave_proposal"] not in anames:
-        raise ScenarioError(f"{where}: open.human_leave_proposal names unknown action")
     init = open_.get("initial_drives", {})
     for dn, v in init.items():
         if dn not in dnames:
@@ -610,164 +440,3 @@ def _check_open(open_: dict, dnames, objects, base_vars, all_vars, anames, where
     out["initial_objects"] = objs
     return out
 
-
-# ---------------------------------------------------------------------------
-# compilation
-
-
-def _holds(cond: Mapping[str, list], view: Mapping[str, str]) -> bool:
-    for var, vals in cond.items():
-        v = view[var]
-        pos = [x for x in vals if not x.startswith("!")]
-        neg = [x[1:] for x in vals if x.startswith("!")]
-        if pos and v not in pos:
-            return False
-        if v in neg:
-            return False
-    return True
-
-
-def _compile(sc: Scenario) -> None:
-    base_vars, base_values = sc.base_vars, sc.base_values
-    radices = [len(v) for v in base_values]
-    n_codes = 1
-    for r in radices:
-        n_codes *= r
-    sc.n_codes = n_codes
-    dnames = sc.drive_names
-    motivs = sc.motivation_names
-    obj_names = sc.object_names
-    act_ids = {a.name: i for i, a in enumerate(sc.actions)}
-    intent_names = sc.intention_names
-
-    # object reduced states (Eq 3.24-3.26); null has one empty state (Eq 3.12)
-    obj_state_vars: list[list[tuple[str, tuple]]] = []
-    obj_state_labels = []
-    for o in obj_names:
-        if o == NULL_OBJECT:
-            obj_state_vars.append([])
-            obj_state_labels.append(("-",))
-            continue
-        spec = sc.objects[o]
-        axes = []
-        if spec["location"] is not None:
-            axes.append((f"{o}.distance", DISTANCES))
-        for var, vals in spec["variables"].items():
-            axes.append((f"{o}.{var}", tuple(vals)))
-        obj_state_vars.append(axes)
-        obj_state_labels.append(tuple("/".join(p) for p in itertools.product(*[vals for _, vals in axes])))
-
-    obj_actions = [tuple(i for i, a in enumerate(sc.actions) if a.obj == o) for o in obj_names]
-    act_obj = tuple(obj_names.index(a.obj) for a in sc.actions)
-    act_local = tuple(obj_actions[act_obj[i]].index(i) for i in range(len(sc.actions)))
-
-    def encode(vals: list[int]) -> int:
-        code = 0
-        for v, r in zip(vals, radices):
-            code = code * r + v
-        return code
-
-    views, codes_vals = [], []
-    for idx in itertools.product(*[range(r) for r in radices]):
-        view = {var: base_values[k][i] for k, (var, i) in enumerate(zip(base_vars, idx))}
-        loc = view["robot.location"]
-        view["human.relation"] = "absent" if view["human.presence"] == "absent" else ("near" if loc == sc.human_location else "far")
-        for o, spec in sc.objects.items():
-            if spec["location"] is not None:
-                view[f"{o}.distance"] = "near" if loc == spec["location"] else "far"
-        views.append(view)
-        codes_vals.append(list(idx))
-
-    stim, stim_names, valid, valid_local, next_code, drive_delta = [], [], [], [], [], []
-    hum, obj_state, intention_of, relation_of, location_of, presence_of = [], [], [], [], [], []
-    with_intention, with_presence, reasonable = [], [], []
-    loc_k, pres_k, int_k = 0, 1, 2
-    detaches = sc.open["leaving_charger_detaches"]
-    for code, (view, idx) in enumerate(zip(views, codes_vals)):
-        s = [0.0] * len(motivs)
-        present = []
-        for st in sc.stimuli:
-            if _holds(st["when"], view):
-                present.append(st["name"])
-                for m, v in st["effects"].items():
-                    s[motivs.index(m)] += float(v)
-        stim.append(tuple(s))
-        stim_names.append(tuple(present))
-        ok = tuple(i for i, a in enumerate(sc.actions) if _holds(a.requires, view))
-        valid.append(ok)
-        valid_local.append(tuple(tuple(act_local[a] for a in ok if act_obj[a] == k) for k in range(len(obj_names))))
-        nxt, dd = [], []
-        for a in sc.actions:
-            new = list(idx)
-            delta = [0.0] * len(dnames)
-            for e in a.effects:
-                if not _holds(e.get("when", {}), view):
-                    continue
-                for var, val in e.get("set", {}).items():
-                    k = base_vars.index(var)
-                    new[k] = base_values[k].index(val)
-                for dn, dv in e.get("drives", {}).items():
-                    delta[dnames.index(dn)] += float(dv)
-            if detaches and new[loc_k] != idx[loc_k]:
-                for o, spec in sc.objects.items():
-                    if spec["location"] == sc.locations[idx[loc_k]]:
-                        for var, val in spec["on_leave"].items():
-                            k = base_vars.index(f"{o}.{var}")
-                            new[k] = base_values[k].index(val)
-            nxt.append(encode(new))
-            dd.append(tuple(delta))
-        next_code.append(tuple(nxt))
-        drive_delta.append(tuple(dd))
-        rel = RELATIONS.index(view["human.relation"])
-        hum.append(idx[int_k] * len(RELATIONS) + rel)
-        os_ = []
-        for k, axes in enumerate(obj_state_vars):
-            si = 0
-            for var, vals in axes:
-                si = si * len(vals) + vals.index(view[var])
-            os_.append(si)
-        obj_state.append(tuple(os_))
-        intention_of.append(idx[int_k])
-        relation_of.append(rel)
-        location_of.append(idx[loc_k])
-        presence_of.append(idx[pres_k])
-        wi = []
-        for i in range(len(intent_names)):
-            new = list(idx)
-            new[int_k] = i
-            wi.append(encode(new))
-        with_intention.append(tuple(wi))
-        wp = []
-        for i in range(len(PRESENCE)):
-            new = list(idx)
-            new[pres_k] = i
-            wp.append(encode(new))
-        with_presence.append(tuple(wp))
-        reasonable.append(tuple(i + 1 for i, it in enumerate(sc.intentions) if _holds(it.reasonable, view)))
-
-    desired = (frozenset(),) + tuple(frozenset(act_ids[d] for d in it.desired) for it in sc.intentions)
-    sc.c = Compiled(
-        action_ids=act_ids,
-        views=views,
-        stim=stim,
-        stim_names=stim_names,
-        valid=valid,
-        valid_local=valid_local,
-        next_code=next_code,
-        drive_delta=drive_delta,
-        hum=hum,
-        obj_state=obj_state,
-        obj_state_labels=obj_state_labels,
-        obj_actions=obj_actions,
-        act_obj=act_obj,
-        act_local=act_local,
-        intention_of=intention_of,
-        relation_of=relation_of,
-        location_of=location_of,
-        presence_of=presence_of,
-        with_intention=with_intention,
-        with_presence=with_presence,
-        reasonable=reasonable,
-        desired=desired,
-        n_hum=len(intent_names) * len(RELATIONS),
-    )

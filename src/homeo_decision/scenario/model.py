@@ -1,0 +1,249 @@
+"""The scenario model: what a validated scenario holds, and its compiled lookup tables.
+
+A scenario is data (JSON), validated on load (``load.py``) and *compiled* (``compile.py``)
+into flat lookup tables so that the per-tick work is a handful of list indexings. Every
+world the scenario can be in is a small integer, the *world code*: a mixed-radix number over
+the base variables (robot location, human presence, intention, each object variable).
+Derived variables (an object's or the human's distance to the robot) are computed from the
+base ones.
+
+Conditions (`requires`, `when`, `reasonable`) are ``{variable: [values]}``; a value
+written ``"!x"`` means "anything but x". All listed variables must hold (AND).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass, field
+from typing import Mapping
+
+SCHEMA = "homeo-scenario"
+SCHEMA_VERSION = 1
+NONE_INTENTION = "none"
+NULL_OBJECT = "null"
+PRESENCE = ("present", "absent")
+RELATIONS = ("near", "far", "absent")
+DISTANCES = ("near", "far")
+
+# Observed children of the hidden intention in the Bayesian network (Section 2.3, Fig 2.3).
+OBS_CHANNELS = ("gesture", "movement", "keyword")
+
+
+class ScenarioError(ValueError):
+    """A scenario file that cannot be used; the message says where and why."""
+
+
+@dataclass(frozen=True)
+class DriveSpec:
+    name: str
+    motivation: str
+    threshold: float
+    rate: float
+    source: str  # "internal" (computed by the robot) or "body" (read from the body)
+
+
+@dataclass(frozen=True)
+class ActionSpec:
+    name: str
+    obj: str
+    requires: dict
+    effects: tuple  # of dicts: {"when": cond, "set": {...}, "drives": {...}}
+
+
+@dataclass(frozen=True)
+class IntentionSpec:
+    name: str
+    desired: tuple
+    reasonable: dict
+
+
+@dataclass(frozen=True)
+class ObservationSpec:
+    """The scenario's ``observations`` block: alphabets, the network's prior and the user's habits.
+
+    ``prior`` and ``habits`` map a channel to one distribution over its alphabet per intention
+    (``Scenario.intention_names`` order, ``none`` first): P0(symbol | intention) for the
+    network, and how the simulated user actually expresses each intention.
+    """
+
+    alphabets: dict  # channel -> tuple of symbols
+    prior_intention: tuple  # P0(intention)
+    prior: dict  # channel -> tuple (per intention) of tuple (per symbol)
+    habits: dict  # channel -> same shape as prior
+
+    def layout(self) -> dict:
+        """What a saved intention model must agree with (besides the intentions)."""
+        return {ch: list(self.alphabets[ch]) for ch in OBS_CHANNELS}
+
+
+@dataclass(frozen=True)
+class RuleCandidate:
+    """One action a rule may pick: taken when it is valid and its ``when`` world condition holds."""
+
+    action: int  # action id
+    when: dict  # condition on the world's variables ({} = always)
+
+
+@dataclass(frozen=True)
+class RuleSpec:
+    """One prioritized rule of the scenario's ``rule_policy`` block (see ``rule_policy.py``).
+
+    It fires when its drive is at or above ``at`` (or, with hysteresis, while the world
+    satisfies ``keep_when`` and the drive is above ``keep_above``) and the world satisfies
+    ``when``; a rule without a drive fires whenever ``when`` holds. ``serve`` rules pick the
+    first valid desired action of the expressed intention; others the first valid candidate
+    whose condition holds. A rule that picks nothing falls through to the next.
+    """
+
+    name: str
+    drive: int | None  # drive index, None: no drive condition
+    at: float  # fire when drive >= at
+    when: dict  # world condition the rule needs besides its drive
+    keep_when: dict | None  # hysteresis: keep going while this holds ...
+    keep_above: float  # ... and the drive is above this
+    serve: bool
+    candidates: tuple  # of RuleCandidate
+
+
+@dataclass(frozen=True)
+class ReferenceSpec:
+    """Published numbers to print beside ours (the scenario's optional ``reference`` block).
+
+    ``metrics``: {"HSR": x, "RSR": x, "CDA": {drive or "all": x}, "CEDA": {...}} (any part may be
+    missing). ``statements``: what the source says about the sweeps, as texts per sweep plus
+    the few numbers and the drive the report's comparisons need (see ``reference.py``).
+    """
+
+    source: str
+    metrics: dict
+    statements: dict | None
+
+
+@dataclass
+class Scenario:
+    """A validated scenario plus its compiled tables (see module docstring)."""
+
+    name: str
+    raw: dict
+    drives: tuple
+    serving: int
+    locations: tuple
+    human_location: str
+    resting_place: str
+    objects: dict  # name -> {"location": str|None, "variables": {var: [values]}, "on_leave": {...}}
+    stimuli: tuple
+    actions: tuple
+    intentions: tuple
+    feedback_value: float
+    praise_change: float
+    learning: dict
+    open: dict
+    source: str = "<memory>"
+    # compiled
+    base_vars: tuple = ()
+    base_values: tuple = ()
+    n_codes: int = 0
+    c: "Compiled" = field(default=None, repr=False)  # type: ignore[assignment]
+    observations: ObservationSpec | None = None  # None: the scenario cannot run intention recognition
+    rule_policy: tuple | None = None  # of RuleSpec; None: the scenario has no rule baseline
+    reference: ReferenceSpec | None = None  # None: no published numbers to compare with
+
+    # -- names ---------------------------------------------------------------
+    @property
+    def drive_names(self) -> list[str]:
+        return [d.name for d in self.drives]
+
+    @property
+    def motivation_names(self) -> list[str]:
+        return [d.motivation for d in self.drives]
+
+    @property
+    def action_names(self) -> list[str]:
+        return [a.name for a in self.actions]
+
+    @property
+    def intention_names(self) -> list[str]:
+        """Intentions as the robot perceives them: ``none`` first."""
+        return [NONE_INTENTION] + [i.name for i in self.intentions]
+
+    @property
+    def object_names(self) -> list[str]:
+        """Objects with a Q-table, the ``null`` object last (Eq 3.12)."""
+        return list(self.objects) + [NULL_OBJECT]
+
+    def action_index(self, name: str) -> int:
+        try:
+            return self.c.action_ids[name]
+        except KeyError:
+            raise ScenarioError(f"unknown action {name!r}; known: {', '.join(self.action_names)}") from None
+
+    def fingerprint(self) -> str:
+        """Hash of what a Q-table depends on (drives, intentions, objects' states/actions)."""
+        blob = json.dumps(self.q_layout(), sort_keys=True).encode()
+        return hashlib.sha256(blob).hexdigest()[:16]
+
+    def q_layout(self) -> dict:
+        """Labels of every Q-table axis: what a saved table must agree with."""
+        c = self.c
+        return {
+            "motivations": self.motivation_names,
+            "intentions": self.intention_names,
+            "relations": list(RELATIONS),
+            "objects": {
+                o: {"states": list(c.obj_state_labels[k]), "actions": [self.actions[a].name for a in c.obj_actions[k]]}
+                for k, o in enumerate(self.object_names)
+            },
+        }
+
+    # -- observations --------------------------------------------------------
+    def encode(self, values: Mapping[str, str]) -> int:
+        """World code of a full assignment of the base variables."""
+        code = 0
+        for var, vals in zip(self.base_vars, self.base_values):
+            v = values.get(var)
+            if v not in vals:
+                raise ScenarioError(f"{var} = {v!r} is not one of {list(vals)}")
+            code = code * len(vals) + vals.index(v)
+        return code
+
+    def decode(self, code: int) -> dict[str, str]:
+        out = {}
+        for var, vals in reversed(list(zip(self.base_vars, self.base_values))):
+            code, r = divmod(code, len(vals))
+            out[var] = vals[r]
+        return dict(reversed(list(out.items())))
+
+    def view(self, code: int) -> dict[str, str]:
+        """Base and derived variables of a world code."""
+        return dict(self.c.views[code])
+
+
+@dataclass
+class Compiled:
+    """Lookup tables indexed by world code (and action / object index)."""
+
+    action_ids: dict
+    views: list  # code -> dict of all variables
+    stim: list  # code -> tuple of per-motivation stimulus sums (Eq 3.2)
+    stim_names: list  # code -> tuple of present stimulus names
+    valid: list  # code -> tuple of valid action ids (Table 3.3 constraints)
+    valid_local: list  # code -> tuple per object of valid local action indices
+    next_code: list  # code -> tuple per action of the world code after its effects
+    drive_delta: list  # code -> tuple per action of tuple per drive of the change (Table 4.1)
+    hum: list  # code -> index of S_hum = intention x relation (Eq 3.9)
+    obj_state: list  # code -> tuple per object of its state index (Eq 3.24-3.26)
+    obj_state_labels: list  # object -> tuple of state labels
+    obj_actions: list  # object -> tuple of action ids (A_o)
+    act_obj: tuple  # action -> object index
+    act_local: tuple  # action -> index within A_o
+    intention_of: list  # code -> intention index (0 = none)
+    relation_of: list  # code -> relation index
+    location_of: list  # code -> location index
+    presence_of: list  # code -> 0 present / 1 absent
+    with_intention: list  # code -> tuple per intention index of the code with that intention
+    with_presence: list  # code -> tuple per presence index
+    reasonable: list  # code -> tuple of intention indices reasonable there (human side)
+    desired: tuple  # intention index -> frozenset of action ids
+    n_hum: int
+

@@ -1,0 +1,88 @@
+"""``homeo-launch``: the node graphs from one command (sim, pepper, bench); see ``sim.py``."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+from homeo_decision.qtable_io import QTableError
+from homeo_decision.scenario import ScenarioError
+from homeo_msgs_py.cli_args import Parser, UserError, float_in, int_at_least, setting
+from homeo_msgs_py.graph import BAYES, INTENTION_MODES
+
+from .monitor import GraphError
+from .sim import PROG, cmd_sim
+
+
+# -- command line -----------------------------------------------------------------------------
+def build_parser() -> argparse.ArgumentParser:
+    ap = Parser(prog=PROG, description="Start the homeostatic robot's ROS 2 node graph.")
+    sub = ap.add_subparsers(dest="cmd", required=True, parser_class=Parser)
+    s = sub.add_parser("sim", help="the graph with the simulated world and human; prints Table 4.5's metrics")
+    s.add_argument("--iterations", type=int_at_least(0), default=5000, help="ticks (0 = until Ctrl-C; default 5000)")
+    s.add_argument("--rate", type=float_in(0.0, 1000.0), default=0.0, help="ticks per second (0 = as fast as lockstep allows)")
+    s.add_argument("--seed", type=int_at_least(0), default=0, help="seed of every component (default 0)")
+    s.add_argument("--dod", type=float_in(0.0, 1.0), default=None, help="Degree of Dedication (Eq 3.27)")
+    s.add_argument("--xi", type=float_in(0.0, 1000.0), default=None, help="motivation factor xi (Eq 3.20)")
+    s.add_argument("--no-pseudo", action="store_true", help="switch off pseudo updates (Eq 3.23)")
+    s.add_argument("--intention", choices=INTENTION_MODES, default=BAYES,
+                   help="recognise the intention with the Bayesian network (default) or observe it (the thesis's "
+                        "simulation; what homeo-sim run does by default)")
+    s.add_argument("--scenario", metavar="FILE", default=None, help="scenario JSON (default: the thesis scenario)")
+    s.add_argument("--set", metavar="KEY=VALUE", type=setting, action="append", default=[],
+                   help="override an open choice of the scenario")
+    s.add_argument("--load-q", metavar="FILE", help="start from a saved Q-table")
+    s.add_argument("--save-q", metavar="FILE", help="save the Q-table at the end")
+    s.add_argument("--trace", metavar="FILE", help="the simulation writes one JSON line per tick")
+    s.add_argument("--action-timeout", type=float_in(0.01, 3600.0), default=5.0,
+                   help="seconds to wait for an action before the tick counts as none (default 5)")
+    s.add_argument("--log-dir", metavar="DIR", help="keep each node's log here (default: a temporary directory)")
+    s.add_argument("--json", action="store_true", help="print the metrics as homeo-sim run --json does")
+    s.add_argument("--quiet", action="store_true", help="no progress bar")
+    from .pepper import add_parser as add_pepper
+
+    add_pepper(sub)
+    b = sub.add_parser("bench", help="seconds per tick of the graph against a raw rclpy chain (the floor)")
+    b.add_argument("--iterations", type=int_at_least(10), default=1000, help="ticks of each (default 1000)")
+    b.add_argument("--rounds", type=int_at_least(1), default=3, help="alternating graph/floor pairs (default 3)")
+    b.add_argument("--json", action="store_true")
+    return ap
+
+
+def _sigterm_as_interrupt(signum, frame):
+    raise KeyboardInterrupt  # `kill` or a CI timeout stops the nodes as Ctrl-C does
+
+
+def main(argv=None) -> int:
+    import signal
+
+    signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
+    ap = build_parser()
+    try:
+        args = ap.parse_args(argv)
+        if args.cmd == "sim":
+            return cmd_sim(args)
+        if args.cmd == "pepper":
+            from .pepper import cmd_pepper
+
+            return cmd_pepper(args)
+        from .bench import cmd_bench
+
+        return cmd_bench(args)
+    except (UserError, ScenarioError, QTableError) as exc:
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        return 2
+    except GraphError as exc:
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        return 1
+    except BrokenPipeError:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

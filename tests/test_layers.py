@@ -1,0 +1,107 @@
+"""The package layers of docs/ARCHITECTURE.md, read from the source's imports (every import, also
+those inside functions), and no import cycle between modules."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+PACKAGES = ("homeo_msgs_py", "homeo_decision", "homeo_intention", "homeo_sim", "pepper_bridge", "homeo_launch")
+# what each package may import besides itself (docs/ARCHITECTURE.md)
+ALLOWED = {
+    "homeo_msgs_py": set(),
+    "homeo_decision": {"homeo_msgs_py"},
+    "homeo_intention": {"homeo_msgs_py", "homeo_decision"},
+    "homeo_sim": {"homeo_msgs_py", "homeo_decision", "homeo_intention"},
+    "pepper_bridge": {"homeo_msgs_py", "homeo_decision", "homeo_intention"},
+    "homeo_launch": set(PACKAGES) - {"homeo_launch"},
+}
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(SRC).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def _imports(path: Path) -> set[str]:
+    """Every module this file imports, absolute (relative imports resolved)."""
+    mod = _module_name(path)
+    pkg = mod if path.name == "__init__.py" else mod.rpartition(".")[0]
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            out.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = pkg.split(".")
+                base = base[:len(base) - (node.level - 1)]
+                target = ".".join(base + ([node.module] if node.module else []))
+            else:
+                target = node.module
+            out.add(target)
+            for a in node.names:  # ``from pkg import module`` imports a module
+                out.add(f"{target}.{a.name}")
+    return out
+
+
+def _graph() -> dict[str, set[str]]:
+    files = {_module_name(p): p for p in SRC.rglob("*.py")}
+    return {m: {i for i in _imports(p) if i in files} for m, p in files.items()}
+
+
+def test_the_scan_sees_imports_inside_functions_and_relative_ones():
+    imports = _imports(SRC / "homeo_sim" / "cli.py")
+    assert "homeo_sim.runner" in imports  # from .runner import ...
+    assert "homeo_sim.intention_bench" in imports  # imported inside cmd_bench
+
+
+@pytest.mark.parametrize("pkg", PACKAGES)
+def test_each_package_imports_only_the_layers_below_it(pkg):
+    bad = []
+    for mod, deps in _graph().items():
+        if mod.split(".")[0] != pkg:
+            continue
+        for d in deps:
+            top = d.split(".")[0]
+            if top != pkg and top not in ALLOWED[pkg]:
+                bad.append(f"{mod} imports {d}")
+    assert not bad, "\n".join(sorted(bad))
+
+
+def test_nothing_imports_the_bringup_package():
+    bad = [f"{m} imports {d}" for m, deps in _graph().items() if not m.startswith("homeo_launch")
+           for d in deps if d.startswith("homeo_launch")]
+    assert not bad
+
+
+def test_the_module_import_graph_has_no_cycle():
+    g = _graph()
+    # a package's __init__ re-exporting its own modules is not a cycle through them
+    for m in g:
+        g[m] = {d for d in g[m] if not m.startswith(d + ".")}
+    state: dict[str, int] = {}
+    stack: list[str] = []
+
+    def visit(m: str) -> list[str] | None:
+        state[m] = 1
+        stack.append(m)
+        for d in sorted(g.get(m, ())):
+            if state.get(d) == 1:
+                return stack[stack.index(d):] + [d]
+            if d not in state:
+                found = visit(d)
+                if found:
+                    return found
+        stack.pop()
+        state[m] = 2
+        return None
+
+    for m in sorted(g):
+        if m not in state:
+            cycle = visit(m)
+            assert cycle is None, " -> ".join(cycle)
