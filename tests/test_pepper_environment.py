@@ -205,8 +205,7 @@ def test_no_valid_body_reading_yet_is_not_ready(world):
     assert env.observe().readings["battery_percent"] == pytest.approx(40.0)
 
 
-def test_world_side_fields_and_log(world, thesis):
-    sc = thesis
+def test_world_side_fields_and_log(world):
     robot, bridge, env = world()
     side = PepperWorldSide(env)
     side.start()

@@ -40,7 +40,7 @@ from std_msgs.msg import String
 from homeo_decision.node_runtime import ScenarioNode, run_scenario_node
 from homeo_msgs_py import graph as G
 from homeo_msgs_py.diagnostics import ERROR, OK, WARN
-from homeo_msgs_py.lockstep import DONE, FINISHING, WAITING, LockstepDriver
+from homeo_msgs_py.lockstep import FINISHING, WAITING, LockstepDriver
 from homeo_msgs_py.node_base import NodeConfigError
 from homeo_msgs_py.qos import EVENT, quiet_pub_events
 
