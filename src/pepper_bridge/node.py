@@ -140,7 +140,13 @@ class BridgeNode(ScenarioNode):
 
     def _send(self, key: str, tick: int, fields: dict, run: int) -> None:
         self.send(self.pubs[key], tick, fields, run)
-        if key == "outcome" and self.side.user_done and self.driver.iterations != tick + 1:
+        if key == "outcome" and self.side.log and self.side.log[-1]["interaction"] == tick + 1 \
+                and not self.side.log[-1]["ok"]:
+            row = self.side.log[-1]
+            self.rejects.note("failed actions")
+            self.get_logger().warning(f"{row['action']} failed: {row['reason']}")
+        its = self.driver.iterations
+        if key == "outcome" and self.side.user_done and (its == 0 or its > tick + 1):
             # the scripted user is done: the next world is the final one (the driver checks
             # iterations right after publishing this outcome)
             self.driver.iterations = tick + 1
