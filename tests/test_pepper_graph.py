@@ -61,7 +61,8 @@ def live():
     g.start()
     probe = Probe(d)
     state = {"robot": robot, "probe": probe, "graph": g, "worlds": probe.collect("/homeo/world"),
-             "outcomes": probe.collect("/homeo/outcome"), "robot_status": []}
+             "outcomes": probe.collect("/homeo/outcome"), "statuses": probe.collect("/homeo/run_status"),
+             "robot_status": []}
 
     def on_diag(arr):
         for s in arr.status:
@@ -141,6 +142,26 @@ def test_wrongly_typed_value_is_reported_on_diagnostics_and_ticks_go_on(live):
         assert isinstance(live["worlds"][-1]["body"]["battery_percent"], float)  # the last good value stands
     finally:
         robot.clear_injections()
+    _alive(live)
+
+
+def test_a_failed_move_is_an_outcome_without_action_and_a_row_with_ok_false(live):
+    robot, probe = live["robot"], live["probe"]
+    moves = ("MoveToH", "MoveToC", "MoveToR")
+
+    def failed_rows():
+        rows = (live["statuses"][-1].get("extra") or {}).get("log") or [] if live["statuses"] else []
+        return [r for r in rows if r["action"] in moves and r["ok"] is False]
+
+    robot._motion = lambda x, y: False  # the stand-in's navigateTo answers False: the robot did not move
+    try:
+        assert probe.spin_until(lambda: bool(failed_rows()), 60.0), "no move was tried"
+    finally:
+        del robot._motion
+    row = failed_rows()[0]
+    assert row["reason"] == "the robot reported failure"
+    out = _outcome_of(live, row["interaction"] - 1)
+    assert out["action"] is None  # nothing was done
     _alive(live)
 
 
