@@ -217,17 +217,12 @@ def test_moves_with_almotion_moveto(pair):
 def test_speech_rest_help_and_device_actions(pair):
     devices = []
     robot, bridge = pair(device_callback=lambda d, c: devices.append((d, c)))
-    sp = CFG.speech
+    say = {name: a.say for name, a in CFG.actions.items()}
     expected = {
-        "Chat": [("ALTextToSpeech", "say", [sp["chat"][0]])],
+        "Chat": [("ALTextToSpeech", "say", [say["Chat"][0]])],
         "Rest": [("ALMotion", "rest", [])],
-        "Play": [("ALTextToSpeech", "say", [CFG.devices["Play"]["say"]])],
-        "Stop": [("ALTextToSpeech", "say", [CFG.devices["Stop"]["say"]])],
-        "LightOn": [("ALTextToSpeech", "say", [CFG.devices["LightOn"]["say"]])],
-        "LightOff": [("ALTextToSpeech", "say", [CFG.devices["LightOff"]["say"]])],
-        "Attach": [("ALTextToSpeech", "say", [sp["attach"]])],
-        "Stay": [("ALTextToSpeech", "say", [sp["stay"]])],
-        "Detach": [("ALTextToSpeech", "say", [sp["detach"]])],
+        **{a: [("ALTextToSpeech", "say", [say[a][0]])] for a in ("Play", "Stop", "LightOn", "LightOff", "Attach", "Stay",
+                                                                  "Detach")},
     }
     for action, calls in expected.items():
         robot.clear_calls()
@@ -235,7 +230,7 @@ def test_speech_rest_help_and_device_actions(pair):
         assert robot_calls(robot) == calls, action
     assert devices == [("player", "play"), ("player", "stop"), ("light", "on"), ("light", "off")]
     bridge.execute("Chat")  # the chat phrases take turns
-    assert robot_calls(robot)[-1] == ("ALTextToSpeech", "say", [sp["chat"][1]])
+    assert robot_calls(robot)[-1] == ("ALTextToSpeech", "say", [say["Chat"][1]])
 
 
 def test_world_follows_actions(pair):

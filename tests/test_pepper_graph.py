@@ -17,9 +17,9 @@ qi = pytest.importorskip("qi")
 
 from rosgraph import Probe, fresh_domain  # noqa: E402
 
-from homeo_sim.processes import Graph, graph_env  # noqa: E402
+from homeo_launch.pepper import pepper_specs  # noqa: E402
+from homeo_launch.processes import Graph, graph_env  # noqa: E402
 from pepper_bridge.config import load_config  # noqa: E402
-from pepper_bridge.launch_pepper import pepper_specs  # noqa: E402
 from pepper_bridge.mapping import BATTERY_KEY, EMOTION_EVENT, TOUCH_EVENTS, WORD_EVENT  # noqa: E402
 from pepper_bridge.standin import StandinRobot  # noqa: E402
 
@@ -29,7 +29,7 @@ START_S = 60.0
 ROBOT = "pepper_bridge: robot"
 NRES = {0: 0.0, 1: 50.0, 2: 80.0, 3: 100.0}  # Table 4.6
 
-LAUNCH = ("import sys; from homeo_sim.cli import Parser; from pepper_bridge.launch_pepper import add_parser, cmd_pepper;"
+LAUNCH = ("import sys; from homeo_msgs_py.cli_args import Parser; from homeo_launch.pepper import add_parser, cmd_pepper;"
           "ap = Parser(prog='homeo-launch'); sub = ap.add_subparsers(dest='cmd', required=True); add_parser(sub);"
           "sys.exit(cmd_pepper(ap.parse_args(sys.argv[1:])))")
 
@@ -61,7 +61,8 @@ def live():
     g.start()
     probe = Probe(d)
     state = {"robot": robot, "probe": probe, "graph": g, "worlds": probe.collect("/homeo/world"),
-             "outcomes": probe.collect("/homeo/outcome"), "robot_status": []}
+             "outcomes": probe.collect("/homeo/outcome"), "statuses": probe.collect("/homeo/run_status"),
+             "robot_status": []}
 
     def on_diag(arr):
         for s in arr.status:
@@ -144,6 +145,26 @@ def test_wrongly_typed_value_is_reported_on_diagnostics_and_ticks_go_on(live):
     _alive(live)
 
 
+def test_a_failed_move_is_an_outcome_without_action_and_a_row_with_ok_false(live):
+    robot, probe = live["robot"], live["probe"]
+    moves = ("MoveToH", "MoveToC", "MoveToR")
+
+    def failed_rows():
+        rows = (live["statuses"][-1].get("extra") or {}).get("log") or [] if live["statuses"] else []
+        return [r for r in rows if r["action"] in moves and r["ok"] is False]
+
+    robot._motion = lambda x, y: False  # the stand-in's navigateTo answers False: the robot did not move
+    try:
+        assert probe.spin_until(lambda: bool(failed_rows()), 60.0), "no move was tried"
+    finally:
+        del robot._motion
+    row = failed_rows()[0]
+    assert row["reason"] == "the robot reported failure"
+    out = _outcome_of(live, row["interaction"] - 1)
+    assert out["action"] is None  # nothing was done
+    _alive(live)
+
+
 def test_robot_dropping_and_coming_back_is_survived(live):
     robot, probe = live["robot"], live["probe"]
     seen = len(live["robot_status"])
@@ -165,7 +186,7 @@ def test_robot_dropping_and_coming_back_is_survived(live):
 
 def test_field_test_through_the_graph_matches_the_in_process_driver(tmp_path):
     """Both robots of the field test, run through the node graph, give homeo-pepper-field's log row for row."""
-    from pepper_bridge.field import run_field, train_q
+    from homeo_launch.field import run_field, train_q
 
     q = {"dedicated": str(train_q(tmp_path / "qd.json", 0.25)), "selfish": str(train_q(tmp_path / "qs.json", 0.0))}
     r = subprocess.run([sys.executable, "-c", LAUNCH, "pepper", "--field", "--script", "field_user.json", "--seed", "0",

@@ -3,11 +3,11 @@
 A Q-table learned in simulation is loaded; the robot starts nearly depleted; a dedicated
 robot (DoD 0.25) and a selfish one (DoD 0) meet the same scripted user (Tables 4.7, 4.8).
 
-:class:`Interaction` is the per-interaction logic the ROS node reuses: given the world dict
-and the recognised intention it perceives, learns the previous transition, and selects;
-given the outcome it moves the internal drives. :class:`IntentionCues` stands in for the
-Bayesian intention recogniser (keywords and gestures looked up in the config). ``run_field``
-wires both to a :class:`~pepper_bridge.bridge.PepperBridge` and an in-process stand-in.
+The robot is ``homeo_decision.robot.Robot`` (an oracle recognition reading the intention the
+config's cues name, the perception, the decision with the loaded Q-table) in a
+``pepper_bridge.environment.PepperEnvironment`` on an in-process stand-in: the objects the graph's
+nodes host, stepped one tick at a time as ``run_loop`` does, until the scripted user is done.
+The tick count continues after the simulated training (``t0`` = 5000).
 
 CLI (``homeo-pepper-field``)::
 
@@ -24,105 +24,32 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from homeo_decision import qtable_io
-from homeo_decision.agent import DecisionCore, Percept
-from homeo_decision.drives import DriveModel
-from homeo_decision.scenario import NONE_INTENTION, Scenario, load_scenario
-
-from .bridge import PepperBridge
-from .config import LinkSettings, PepperConfig, load_config
-from .events import FEEDBACK, PROPOSAL, STATUS
-from .naoqi_link import RobotUnavailable
-from .user import load_script
+from homeo_decision.agent import DecisionCore
+from homeo_decision.robot import OracleRecognition, Robot
+from homeo_decision.scenario import Scenario, load_scenario
+from pepper_bridge.bridge import PepperBridge
+from pepper_bridge.config import LinkSettings, PepperConfig, load_config
+from pepper_bridge.environment import PepperEnvironment
+from pepper_bridge.naoqi_link import RobotUnavailable
+from pepper_bridge.user import load_script
 
 DODS = (("dedicated", 0.25), ("selfish", 0.0))
 TRAIN_ITERATIONS = 5000
 
 
-class IntentionCues:
-    """Keyword / gesture -> intention, from the config's ``intention_cues`` (keyword first)."""
-
-    def __init__(self, cues: dict, intentions):
-        self.kw = dict(cues.get("keywords", {}))
-        self.gest = dict(cues.get("gestures", {}))
-        known = set(intentions)
-        for name in list(self.kw.values()) + list(self.gest.values()):
-            if name not in known:
-                raise ValueError(f"intention cue names unknown intention {name!r}")
-
-    def __call__(self, obs: dict) -> str | None:
-        if obs.get("keyword") in self.kw:
-            return self.kw[obs["keyword"]]
-        if obs.get("gesture") in self.gest:
-            return self.gest[obs["gesture"]]
-        return None
+def initial_drives(sc: Scenario, given: dict | None) -> list[float]:
+    """The scenario's initial drives, with the script's ``robot.drives`` over them."""
+    init = sc.open["initial_drives"]
+    init = dict(init) if isinstance(init, dict) else dict(zip(sc.drive_names, init))
+    init.update(given or {})
+    return [float(init[n]) for n in sc.drive_names]
 
 
-def world_code(sc: Scenario, world: dict, intention: str | None) -> int:
-    """The scenario's world code of a bridge ``world`` dict and a recognised intention."""
-    values = {"robot.location": world["robot"]["location"], "human.presence": world["human"]["presence"],
-              "intention": intention or NONE_INTENTION}
-    for obj, d in world["objects"].items():
-        values[f"{obj}.status"] = d["status"]
-    return sc.encode(values)
-
-
-def body_drives(sc: Scenario, body: dict) -> list:
-    """The body drives (indexed like all drives) from a bridge ``body`` dict."""
-    return [float(body.get(d.name) or 0.0) if d.source == "body" else 0.0 for d in sc.drives]
-
-
-@dataclass
-class Interaction:
-    """One robot in the field: drives + decision core, stepped once per interaction."""
-
-    sc: Scenario
-    robot: DecisionCore
-    drives: DriveModel
-    t0: int = TRAIN_ITERATIONS  # the schedule continues after the simulated training
-    learn: bool = True
-    k: int = 0
-    pending: tuple | None = None  # (percept, action, feedback, proposal) awaiting s'
-    last: Percept | None = None
-
-    def decide(self, world: dict, intention: str | None) -> tuple[Percept, str]:
-        """Perceive (body drives from the world dict), learn the previous step, select an action."""
-        body = world["body"]
-        prev = list(self.drives.values)
-        bd = body_drives(self.sc, {d.name: (body.get(d.name) if body.get(d.name) is not None else prev[i])
-                                   for i, d in enumerate(self.sc.drives)})
-        self.drives.set_body(bd)
-        code = world_code(self.sc, world, intention)
-        p = self.robot.perceive(self.drives.values, code)
-        if self.pending is not None and self.learn:
-            pp, a, fb, prop = self.pending
-            self.robot.learn(pp, a, p.drives, fb, prop, p, self.t0 + self.k - 1)
-        self.pending = None
-        a = self.robot.select(p, self.t0 + self.k)
-        self.last = p
-        return p, self.sc.actions[a].name
-
-    def conclude(self, p: Percept, action: str, outcome: dict) -> None:
-        """Internal drives after the action, the feedback and the time step; the transition waits for s'."""
-        a = self.sc.action_index(action)
-        expressed = self.sc.c.intention_of[p.code] != 0
-        self.drives.apply_action(p.code, a)
-        self.drives.apply_feedback(outcome["feedback"])
-        self.drives.apply_time(expressed, outcome["feedback"] > 0)
-        prop = outcome.get("proposal")
-        self.pending = (p, a, outcome["feedback"], self.sc.action_index(prop) if prop else None)
-        self.k += 1
-
-
-def make_robot(sc: Scenario, dod: float, seed: int, q_table: str | Path | None, initial: dict | None) -> Interaction:
+def make_robot(sc: Scenario, dod: float, seed: int, q_table: str | Path | None) -> Robot:
     core = DecisionCore(sc, seed, dod=dod)
     if q_table:
         qtable_io.load(core.q, q_table)
-    drives = DriveModel(sc)
-    init = dict(zip(sc.drive_names, (sc.open["initial_drives"][n] for n in sc.drive_names))) \
-        if isinstance(sc.open["initial_drives"], dict) else dict(zip(sc.drive_names, sc.open["initial_drives"]))
-    init.update(initial or {})
-    drives.reset([float(init[n]) for n in sc.drive_names])
-    return Interaction(sc, core, drives)
+    return Robot(sc, core, OracleRecognition(sc))
 
 
 def train_q(path: str | Path, dod: float | None = None, seed: int = 0, iterations: int = TRAIN_ITERATIONS) -> Path:
@@ -156,51 +83,37 @@ class FieldResult:
                 "survival_actions": sum(a in ("MoveToC", "Attach", "Stay") for a in acts)}
 
 
-def run_interaction(bridge: PepperBridge, robot: Interaction, cues: IntentionCues, carry: list,
-                    quiet: float, window: float) -> tuple[dict, list]:
-    """One interaction: observe, decide, act, collect the answer. ``carry`` holds the events seen
-    since the last action (the user's expression); returns the log row and the events that follow."""
-    obs = bridge.observation(carry)
-    intention = cues(obs)
-    world = bridge.read_world()
-    p, action = robot.decide(world, intention)
-    done = bridge.execute(action)
-    after = bridge.collect(quiet, window)
-    answer = [e for e in after if e.kind in (FEEDBACK, PROPOSAL)]
-    outcome = bridge.outcome(action, answer)
-    robot.conclude(p, action, outcome)
-    sc = robot.sc
-    row = {"interaction": robot.k, "m_dom": sc.motivation_names[p.m_dom], "intention": intention, "action": action,
-           "feedback": outcome["feedback"], "proposal": outcome["proposal"], "ok": done["ok"],
-           "drives": dict(zip(sc.drive_names, [round(x, 1) for x in p.drives])),
-           "location": world["robot"]["location"], "battery_percent": world["body"]["battery_percent"],
-           "observation": obs}
-    return row, [e for e in after if e.kind not in (FEEDBACK, PROPOSAL, STATUS)]
-
-
 def run_field(script: str | Path | dict, dod: float, seed: int, q_table: str | Path | None, *, label: str = "",
               config: PepperConfig | None = None, scenario: Scenario | None = None, quiet: float = 0.15,
-              window: float = 3.0, max_interactions: int = 40) -> FieldResult:
+              window: float = 3.0, max_interactions: int = 40, t0: int = TRAIN_ITERATIONS) -> FieldResult:
     """Run one robot against an in-process stand-in with the scripted user until the script ends."""
-    from .standin import StandinRobot
+    from pepper_bridge.standin import StandinRobot
 
     sc = scenario or load_scenario()
-    cfg = config or load_config(actions=tuple(sc.action_names))
+    cfg = config or load_config(scenario=sc)
     raw = script if isinstance(script, dict) else load_script(script)
-    desired = {i.name: tuple(i.desired) for i in sc.intentions}
-    stand = StandinRobot(cfg, raw, seed=seed, time_scale=0.0, desired=desired)
+    stand = StandinRobot(cfg, raw, seed=seed, time_scale=0.0, scenario=sc)
     url = stand.start()
     bridge = PepperBridge(cfg, LinkSettings(url=url), sc)
     res = FieldResult(label, dod, seed)
     try:
         if not bridge.start(10.0):
             raise RobotUnavailable(f"stand-in at {url} not reachable")
-        robot = make_robot(sc, dod, seed, q_table, raw.get("robot", {}).get("drives"))
-        cues = IntentionCues(cfg.intention_cues, sc.intention_names[1:])
-        carry = bridge.collect(quiet, window)
-        while not stand.user.done and robot.k < max_interactions:
-            row, carry = run_interaction(bridge, robot, cues, carry, quiet, window)
+        env = PepperEnvironment(bridge, quiet=quiet, window=window, use_cues=True)
+        robot = make_robot(sc, dod, seed, q_table)
+        robot.restart(initial_drives(sc, raw.get("robot", {}).get("drives")))
+        obs = env.reset(seed)
+        # run_loop, one tick at a time: the run ends when the scripted user does
+        t = t0
+        a = robot.step(t, obs, None, final=stand.user.done)
+        while not stand.user.done and env.tick < max_interactions:
+            p = robot.percept
+            out = env.step(a)
+            row = dict(env.last_row, m_dom=sc.motivation_names[p.m_dom], intention=env.last_row["cue_intention"],
+                       drives=dict(zip(sc.drive_names, [round(x, 1) for x in p.drives])))
             res.log.append(row)
+            t += 1
+            a = robot.step(t, env.observe(), out, final=stand.user.done or env.tick >= max_interactions)
         res.user_log = list(stand.user.log)
         res.diagnostics = bridge.diagnostics.snapshot()
     finally:
@@ -250,7 +163,7 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     qi.logging.setLevel(qi.logging.ERROR)
     sc = load_scenario()
-    cfg = load_config(a.config, actions=tuple(sc.action_names))
+    cfg = load_config(a.config, scenario=sc)
     with tempfile.TemporaryDirectory() as tmp:
         tables = {}
         for label, dod in DODS:

@@ -16,12 +16,8 @@ as ``homeo-pepper-field`` does; ``--fresh-schedule`` starts the schedule over). 
 
 ``--field`` runs the field test through the graph: a dedicated (DoD 0.25) and a selfish
 (DoD 0) robot, each with its own stand-in, meet the same scripted user; both tables are
-printed side by side (``pepper_bridge.field.side_by_side``).
-
-Wiring (in ``homeo_sim/launch.py``)::
-
-    from pepper_bridge.launch_pepper import add_parser as add_pepper; add_pepper(sub)   # build_parser
-    if args.cmd == "pepper": return cmd_pepper(args)                                    # main
+printed side by side (``homeo_launch.field.side_by_side``); each table is row for row the one
+of ``homeo-pepper-field`` (the same robot and environment objects, split across the nodes).
 """
 
 from __future__ import annotations
@@ -248,7 +244,7 @@ def _check_standin(standin: StandinProcess | None) -> None:
 def run_robot(a, label: str, dod: float | None, q_table: str | None, log_dir: Path, on_row=None,
               last: dict | None = None) -> dict:
     """One graph run (with its own stand-in when asked); returns {"status", "user_log", ...}."""
-    from .user import load_script
+    from pepper_bridge.user import load_script
 
     script = None
     overrides: dict = {}
@@ -280,7 +276,7 @@ def run_robot(a, label: str, dod: float | None, q_table: str | None, log_dir: Pa
 
 
 def _script_path(s: str) -> Path:
-    from .config import SCRIPTS_DIR
+    from pepper_bridge.config import SCRIPTS_DIR
 
     p = Path(s)
     if not p.exists() and not p.is_absolute() and (SCRIPTS_DIR / p).exists():
@@ -364,8 +360,10 @@ def _check_args(a) -> None:
     if a.collect_quiet is None:
         a.collect_quiet = 0.15 if a.standin else a.collect_window
     from homeo_decision.scenario import load_scenario
+    from pepper_bridge.config import load_config
 
-    load_scenario(a.scenario)  # a bad scenario is a one-line error here, not in four nodes
+    # a bad scenario or config is a one-line error here, not in four nodes
+    load_config(a.config, scenario=load_scenario(a.scenario))
 
 
 def _row_line(r: dict) -> str:
@@ -380,8 +378,8 @@ HEADER = f"{'#':>3}  {'m_dom':<10} {'intention':<9} {'action':<8} {'fb':>3}  {'p
 def cmd_pepper(a) -> int:
     from homeo_decision.qtable_io import QTableError
 
-    from .config import ConfigError
-    from .user import ScriptError
+    from pepper_bridge.config import ConfigError
+    from pepper_bridge.user import ScriptError
 
     try:
         _check_args(a)

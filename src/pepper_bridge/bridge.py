@@ -1,10 +1,12 @@
 """The ROS-free bridge: robot readings -> world/body dicts, actions -> NAOqi calls, events -> outcome.
 
-``PepperBridge`` is what the ROS node wraps (and what ``field.py`` drives in-process):
+``PepperBridge`` is what :class:`~pepper_bridge.environment.PepperEnvironment` wraps:
 
 - ``start(wait)`` / ``stop()``; ``status()``; ``diagnostics.snapshot()``;
-- ``read_body()`` / ``read_world()``: the ``body`` and ``world`` dicts of the message contract;
-- ``execute(action)``: the action's NAOqi calls (and the device callback for Play/Stop/LightOn/LightOff);
+- ``read_body()`` / ``read_world()``: the robot's readings as ``body`` and ``world`` dicts (names
+  of the scenario: which drive the battery and the temperature are read into, which object
+  variable the plug sensor reads and what each action does come from the config);
+- ``execute(action)``: the action's NAOqi calls (and the device callback for device commands);
 - ``events``: a ``queue.Queue`` of :class:`~pepper_bridge.events.BridgeEvent` filled on qi threads;
   ``poll_events()`` drains it; ``outcome(action, events)`` / ``observation(events)`` build the
   outcome and observation fields from drained events.
@@ -23,9 +25,9 @@ from typing import Any, Callable
 from homeo_decision.scenario import Scenario, load_scenario
 
 from . import events as ev
-from .config import DEVICE_ACTIONS, LinkSettings, PepperConfig, load_config
+from .config import LinkSettings, PepperConfig, check_scenario, load_config
 from .mapping import (BATTERY_KEY, PEOPLE_KEY, PEPPER_JOINTS, PLUGGED_KEY, ZONE_KEYS, Rejected, WordMap,
-                      max_temperature_status, neng_from_percent, nres_from_status, percent_from_albattery,
+                      max_temperature_status, need_from_percent, need_from_status, percent_from_albattery,
                       percent_from_fraction, plugged, presence_of, relation_from_zones, relative_move,
                       temperature_key)
 from .naoqi_link import CLIENT_NAME, NaoqiLink, RobotUnavailable
@@ -37,7 +39,9 @@ class PepperBridge:
     def __init__(self, config: PepperConfig | None = None, settings: LinkSettings | None = None,
                  scenario: Scenario | None = None, device_callback: DeviceCallback | None = None):
         self.sc = scenario or load_scenario()
-        self.cfg = config or load_config(actions=tuple(self.sc.action_names))
+        self.cfg = config or load_config(scenario=self.sc)
+        if config is not None:
+            check_scenario(config, self.sc)
         self.settings = settings or LinkSettings()
         self.device_callback = device_callback
         self.words = WordMap(self.sc.action_names, self.cfg.proposals, self.cfg.keywords)
@@ -48,14 +52,17 @@ class PepperBridge:
         self._lock = threading.Lock()
         # what the bridge knows of the world beyond the sensors
         self.location = self.cfg.start_location
-        self.devices = {"player": "idle", "light": "off"}
-        self.charger_booked = "idle"
-        self._chat_i = 0
+        # object states as the bridge believes them ("object.variable" -> value): the scenario's
+        # initial states, then what the actions set (a sensed variable overrides its belief)
+        init = dict(self.sc.open.get("initial_objects") or {})
+        self.states = {f"{o}.{var}": init.get(f"{o}.{var}", vals[0])
+                       for o, spec in self.sc.objects.items() for var, vals in spec["variables"].items()}
+        self.sensed: dict = {}
+        self._said = {a: 0 for a in self.cfg.actions}  # phrases take turns per action
         # last good readings
         self.battery_percent: float | None = None
         self.temperature_status: int | None = None
         self.relation = "absent"
-        self.charger = "idle"
         # proposal -> the intention it clarifies (when exactly one intention desires it)
         owners: dict[str, list] = {}
         for it in self.sc.intentions:
@@ -190,34 +197,43 @@ class PepperBridge:
             self.relation = relation_from_zones(*(self._get(k, []) for k in list(ZONE_KEYS) + [PEOPLE_KEY]))
         return self.relation
 
-    def read_charger(self) -> str:
+    def read_plug(self) -> None:
+        """The object variable the config reads from the plug sensor (without a sensor: what the bridge asked for)."""
+        plug = self.cfg.plug
+        if not plug:
+            return
         v = self._get(PLUGGED_KEY, _NO)
-        if v is _NO:  # no plug sensor: what the bridge asked for
-            self.charger = self.charger_booked
-        else:
-            try:
-                self.charger = "charging" if plugged(v) else "idle"
-            except Rejected as r:
-                self._reject(r)
-        return self.charger
+        if v is _NO:
+            self.sensed.pop(plug["variable"], None)
+            return
+        try:
+            self.sensed[plug["variable"]] = plug["plugged"] if plugged(v) else plug["unplugged"]
+        except Rejected as r:
+            self._reject(r)  # the last good reading stands
 
     def read_body(self) -> dict:
+        """Battery percent and temperature status, and the body drives read from them (Section 4.3.1, Table 4.6)."""
         p = self.read_battery()
         s = self.read_temperature()
         return {"battery_percent": p, "temperature_status": s,
-                "NEng": None if p is None else neng_from_percent(p),
-                "NRes": None if s is None else nres_from_status(s)}
+                self.cfg.battery_drive: None if p is None else need_from_percent(p),
+                self.cfg.temperature_drive: None if s is None else need_from_status(s)}
+
+    def object_states(self) -> dict:
+        """``{object: {variable: value}}``: the beliefs, with the sensed variables read."""
+        out: dict = {}
+        for key, v in dict(self.states, **self.sensed).items():
+            o, _, var = key.partition(".")
+            out.setdefault(o, {})[var] = v
+        return out
 
     def read_world(self) -> dict:
-        """The ``world`` dict of the message contract (raises RobotUnavailable when disconnected)."""
+        """The robot's ``world`` dict (raises RobotUnavailable when disconnected)."""
         body = self.read_body()
         rel = self.read_relation()
-        charger = self.read_charger()
-        return {"robot": {"location": self.location},
-                "objects": {"charger": {"status": charger}, "player": {"status": self.devices["player"]},
-                            "light": {"status": self.devices["light"]}},
-                "human": {"presence": presence_of(rel), "relation": rel},
-                "body": body}
+        self.read_plug()
+        return {"robot": {"location": self.location}, "objects": self.object_states(),
+                "human": {"presence": presence_of(rel), "relation": rel}, "body": body}
 
     # -- actions ----------------------------------------------------------------------
     def execute(self, action: str) -> dict:
@@ -241,50 +257,38 @@ class PepperBridge:
         return {"action": action, "ok": ok, "reason": reason, "calls": calls}
 
     def _do(self, action: str, call) -> bool:
-        cfg = self.cfg
-        if action.startswith("MoveTo") and action[6:] in cfg.places:
-            target = action[6:]
-            if not call("ALMotion", "robotIsWakeUp"):
-                call("ALMotion", "wakeUp")
-            dx, dy = relative_move(cfg.places[self.location], cfg.places[target])
-            if cfg.navigation == "ALNavigation" and self.link.has("ALNavigation"):
-                ok = bool(call("ALNavigation", "navigateTo", dx, dy))
-            else:
-                ok = bool(call("ALMotion", "moveTo", dx, dy, 0.0))
-            if ok:
-                if target != self.location:
-                    self.charger_booked = "idle"
-                self.location = target
-            return ok
-        if action == "Rest":
+        spec = self.cfg.actions.get(action)
+        if spec is None:
+            raise RuntimeError(f"the config {self.cfg.source} says nothing of {action}")
+        if spec.move is not None:
+            return self._move(spec.move, call)
+        if spec.rest:
             call("ALMotion", "rest")
-            return True
-        if action == "Chat":
-            phrases = cfg.speech["chat"]
-            call("ALTextToSpeech", "say", phrases[self._chat_i % len(phrases)])
-            self._chat_i += 1
-            return True
-        if action in ("Attach", "Detach", "Stay"):
-            phrase = cfg.speech.get(action.lower(), "")
-            if phrase:
-                call("ALTextToSpeech", "say", phrase)
-            if action == "Attach":
-                self.charger_booked = "charging"
-            elif action == "Detach":
-                self.charger_booked = "idle"
-            return True
-        if action in cfg.devices:
-            d = cfg.devices[action]
-            if d.get("say"):
-                call("ALTextToSpeech", "say", d["say"])
-            if self.device_callback is not None:
-                self.device_callback(d["device"], d["command"])
-            if d["device"] in self.devices:
-                self.devices[d["device"]] = {"play": "playing", "stop": "idle"}.get(d["command"], d["command"])
-            return True
-        if action in DEVICE_ACTIONS:
-            raise RuntimeError(f"no device handler configured for {action}")
-        raise RuntimeError(f"the bridge does not know how to perform {action}")
+        if spec.say:
+            n = self._said[action]
+            call("ALTextToSpeech", "say", spec.say[n % len(spec.say)])
+            self._said[action] = n + 1
+        if spec.device is not None and self.device_callback is not None:
+            self.device_callback(spec.device, spec.command)
+        self.states.update(spec.set)
+        return True
+
+    def _move(self, target: str, call) -> bool:
+        cfg = self.cfg
+        if not call("ALMotion", "robotIsWakeUp"):
+            call("ALMotion", "wakeUp")
+        dx, dy = relative_move(cfg.places[self.location], cfg.places[target])
+        if cfg.navigation == "ALNavigation" and self.link.has("ALNavigation"):
+            ok = bool(call("ALNavigation", "navigateTo", dx, dy))
+        else:
+            ok = bool(call("ALMotion", "moveTo", dx, dy, 0.0))
+        if ok:
+            if target != self.location:  # what leaving a place does to the objects there (the scenario's on_leave)
+                for o, spec in self.sc.objects.items():
+                    if spec.get("location") == self.location:
+                        self.states.update({f"{o}.{var}": v for var, v in (spec.get("on_leave") or {}).items()})
+            self.location = target
+        return ok
 
 
 _NO = object()

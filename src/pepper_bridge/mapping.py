@@ -42,7 +42,7 @@ PEOPLE_KEY = "PeoplePerception/PeopleList"
 EMOTIONS = ("calm", "anger", "joy", "sorrow", "laughter")  # order of the levels list
 
 # Table 4.6: maximum joint temperature status -> NRes.
-TEMPERATURE_TO_NRES = {0: 0.0, 1: 50.0, 2: 80.0, 3: 100.0}
+TEMPERATURE_TO_NEED = {0: 0.0, 1: 50.0, 2: 80.0, 3: 100.0}
 
 
 def temperature_key(joint: str) -> str:
@@ -87,8 +87,8 @@ def percent_from_albattery(value: Any, source: str = "ALBattery.getBatteryCharge
     return x
 
 
-def neng_from_percent(percent: float) -> float:
-    """NEng = 100 - battery percentage (Section 4.3.1)."""
+def need_from_percent(percent: float) -> float:
+    """The energy drive (the thesis's NEng) = 100 - battery percentage (Section 4.3.1)."""
     return 100.0 - float(percent)
 
 
@@ -98,14 +98,14 @@ def temperature_status(value: Any, source: str = "temperature status") -> int:
     if x != int(x):
         raise Rejected(source, value, "temperature status must be an integer")
     s = int(x)
-    if s not in TEMPERATURE_TO_NRES:
+    if s not in TEMPERATURE_TO_NEED:
         raise Rejected(source, value, "temperature status outside 0..3")
     return s
 
 
-def nres_from_status(status: int) -> float:
-    """Table 4.6."""
-    return TEMPERATURE_TO_NRES[status]
+def need_from_status(status: int) -> float:
+    """The rest drive (the thesis's NRes) from the hottest joint's temperature status: Table 4.6."""
+    return TEMPERATURE_TO_NEED[status]
 
 
 def max_temperature_status(values: Mapping[str, Any]) -> tuple[int | None, list[Rejected]]:

@@ -50,7 +50,6 @@ from .mapping import (BATTERY_KEY, EMOTION_EVENT, PEOPLE_KEY, PEPPER_JOINTS, PLU
 from .user import ScriptedUser, load_script, timed_entry_emits
 
 MOTION_JOINTS = ("HipRoll", "HipPitch", "KneePitch", "WheelFL", "WheelFR", "WheelB")
-USER_PLACE = "H"
 PERSON_ID = 17
 
 
@@ -79,7 +78,7 @@ class StandinRobot:
     def __init__(self, config: PepperConfig | None = None, script: dict | None = None, *, seed: int = 0,
                  battery: float | None = None, time_scale: float = 1.0, listen: str = "tcp://127.0.0.1:0",
                  refuse_subscriber: bool = False, body: BodyParams | None = None, desired: dict | None = None,
-                 clock=time.monotonic):
+                 scenario=None, clock=time.monotonic):
         self.cfg = config or load_config()
         self.script = script or {"schema": "homeo-pepper-user", "version": 1}
         self.rng = component_rng(seed, "standin")
@@ -103,11 +102,17 @@ class StandinRobot:
         self.awake = False
         self.plugged = False
         self.moved_m = 0.0
-        if desired is None:
+        if scenario is None:
             from homeo_decision.scenario import load_scenario
 
-            desired = {i.name: tuple(i.desired) for i in load_scenario().intentions}
-        self.user = ScriptedUser(self.script, desired, self.cfg.gesture_event, self.cfg.movement_event)
+            scenario = load_scenario()
+        if desired is None:
+            desired = {i.name: tuple(i.desired) for i in scenario.intentions}
+        self.user_place = scenario.human_location  # the user stays there (the scenario's human)
+        plug_obj = self.cfg.plug["variable"].partition(".")[0] if self.cfg.plug else None
+        self.user = ScriptedUser(self.script, desired, self.cfg.gesture_event, self.cfg.movement_event,
+                                 plug_actions=self.cfg.plug_actions(),
+                                 plug_place=(scenario.objects.get(plug_obj) or {}).get("location"))
         self.phrases = self.cfg.phrase_actions()
         self._last = clock()
         self.session: qi.Session | None = None
@@ -229,7 +234,7 @@ class StandinRobot:
     def relation(self) -> str:
         if not self.user.present:
             return "absent"
-        return "near" if self.location == USER_PLACE else "far"
+        return "near" if self.location == self.user_place else "far"
 
     def statuses(self) -> dict:
         h = int(self.heat)
@@ -392,7 +397,7 @@ class StandinRobot:
                     robot._advance()
                     robot.awake = False
                     robot._act()
-                    emits = robot._user_saw("Rest")
+                    emits = robot._user_saw(robot.cfg.rest_action())
                 robot.emit(emits)
 
             @qi.bind(qi.Bool, [])
@@ -498,7 +503,7 @@ class StandinRobot:
                 raise RuntimeError("ALMotion: the robot is resting; call wakeUp first")
             self._move(float(x), float(y))
             loc = self.location
-            emits = self._user_saw(f"MoveTo{loc}" if loc else None)
+            emits = self._user_saw(self.cfg.move_action(loc))
         self.emit(emits)
         return True
 

@@ -22,8 +22,8 @@ angry voice (``EmotionRecognized`` with anger ``anger``, default 0.9) otherwise 
 true). A missed intention is expressed again, up to ``patience`` attempts (default 1). An
 interaction with ``"intention": null`` expresses nothing and answers nothing. ``presence``
 ("present" / "absent") moves the user before expressing. ``helps`` (default true, per interaction or for the whole
-file): asked for help with the charger (Attach / Detach), the user plugs / unplugs the robot when it stands at
-the charger. ``start`` sets the stand-in body; ``robot`` holds the robot's initial internal
+file): asked for help with the plug (an action of the config that sets the plug variable: the thesis's
+Attach / Detach), the user plugs / unplugs the robot when it stands where the plugged object is (the charger). ``start`` sets the stand-in body; ``robot`` holds the robot's initial internal
 drives for the field driver. Timed entries fire at ``at`` wall seconds after the user starts
 (when the robot first starts its speech recognition).
 """
@@ -57,6 +57,8 @@ class ScriptedUser:
     desired: Mapping[str, tuple]  # intention -> desired actions (from the scenario)
     gesture_event: str = "PepperBridge/Gesture"
     movement_event: str = "PepperBridge/Movement"
+    plug_actions: Mapping[str, bool] = field(default_factory=dict)  # action -> True: plug in, False: unplug
+    plug_place: str | None = None  # where the plug is (None: anywhere)
     index: int = 0
     attempts: int = 0
     present: bool = True
@@ -102,8 +104,9 @@ class ScriptedUser:
         it = self.current
         plug = None
         helps = (it or {}).get("helps", self.script.get("helps", True))
-        if action in ("Attach", "Detach") and helps and self.present and location == "C":
-            plug = action == "Attach"
+        if action in self.plug_actions and helps and self.present \
+                and (self.plug_place is None or location == self.plug_place):
+            plug = self.plug_actions[action]
         if it is None or not self.started:
             return Reaction([], plug)
         intention = it.get("intention") if self.present else None
