@@ -221,8 +221,6 @@ CODE = ["homeo_decision/scenario", "homeo_decision/baselines.py", "homeo_sim/rep
 
 def test_no_thesis_name_in_code(thesis):
     names = set(thesis.drive_names) | set(thesis.motivation_names) | set(thesis.action_names) | set(thesis.objects)
-    # intention names are plain words (leave, come, music): only as string literals, not identifiers (tqdm's leave=)
-    strings = names | {i.name for i in thesis.intentions}
     hits = []
     files = []
     for c in CODE:

@@ -127,7 +127,7 @@ class DecisionCore(Perceiving):
     def select(self, p: Percept, t: int) -> int:
         """Lines 11-17: softmax (Eq 3.17) over the valid actions, at the temperature of tick t."""
         tau = self.phase(t).tau
-        return self.q.select(p.states, self.valid[p.code], tau, self.rng.random())
+        return self.q.select_in(p.states, p.code, tau, self.rng.random())
 
     def learn(self, p: Percept, action: int, after: Sequence[float], feedback: int, proposal: int | None,
               p_next: Percept, t: int) -> Learned:

@@ -76,6 +76,9 @@ class ObjectQ:
         # base[code][o] = hum * n_os[o] + os[o]; add m_dom * stride[o] for the reduced state
         self.base = [tuple(c.hum[code] * self.n_os[o] + c.obj_state[code][o] for o in range(self.n_obj)) for code in range(sc.n_codes)]
         self.valid_local = c.valid_local
+        # per world code: (object, local index) of each valid action, in order (the softmax's hot path)
+        self._valid_pairs = [tuple((c.act_obj[a], c.act_local[a]) for a in v) for v in c.valid]
+        self._valid = c.valid
         self.max_over_valid = sc.open["value_max_over"] == "valid"
         self.others = tuple(tuple(m for m in range(self.n_obj) if m != o) for o in range(self.n_obj))
         # every reduced-state tuple, precomputed: states() is on the per-tick path
@@ -108,6 +111,11 @@ class ObjectQ:
         """Draw an action from Eq 3.17 with the uniform ``u`` in [0, 1)."""
         q, ao, al = self.q, self.act_obj, self.act_local
         return softmax_pick([q[ao[a]][states[ao[a]]][al[a]] for a in valid], valid, tau, u)
+
+    def select_in(self, states: Sequence[int], code: int, tau: float, u: float) -> int:
+        """``select`` over the valid actions of world ``code`` (Table 3.3), from precomputed indices."""
+        q = self.q
+        return softmax_pick([q[o][states[o]][j] for o, j in self._valid_pairs[code]], self._valid[code], tau, u)
 
     # -- learning (Eq 3.14-3.16, 3.23) ---------------------------------------
     def _max(self, o: int, s: int, code: int) -> float:

@@ -68,6 +68,7 @@ class FieldResult:
     log: list = field(default_factory=list)  # one row per interaction
     user_log: list = field(default_factory=list)  # the scripted user's judgement (stand-in only)
     diagnostics: dict = field(default_factory=dict)
+    roles: dict = field(default_factory=dict)  # charging roles of the actions (``charging_roles``)
 
     def summary(self) -> dict:
         judged = [r for r in self.user_log if r["intention"] is not None]
@@ -79,8 +80,23 @@ class FieldResult:
         return {"label": self.label, "dod": self.dod, "seed": self.seed, "interactions": len(self.log),
                 "intentions": len(wanted), "satisfied": sum(wanted.values()),
                 "hsr": (sum(r["satisfied"] for r in judged) / len(judged)) if judged else None,
-                "first_attach": first(("Attach",)), "first_charger": first(("MoveToC", "Attach")),
-                "survival_actions": sum(a in ("MoveToC", "Attach", "Stay") for a in acts)}
+                "first_attach": first(self.roles.get("plug", ())),
+                "first_to_plug": first(self.roles.get("plug", ()) + self.roles.get("to_plug", ())),
+                "survival_actions": sum(a in self.roles.get("plug_object", ()) for a in acts)}
+
+
+def charging_roles(cfg: PepperConfig, sc: Scenario) -> dict:
+    """Which actions the field summary counts, from the config and the scenario: ``plug`` asks to
+    be plugged in, ``to_plug`` moves to the plugged object's place, ``plug_object`` are that object's
+    actions except unplugging (the robot looking after its battery)."""
+    plugs = cfg.plug_actions()
+    if not cfg.plug:
+        return {}
+    obj = cfg.plug["variable"].split(".")[0]
+    place = sc.objects[obj]["location"]
+    to = cfg.move_action(place) if place else None
+    return {"plug": tuple(a for a, on in plugs.items() if on), "to_plug": (to,) if to else (),
+            "plug_object": tuple(a.name for a in sc.actions if a.obj == obj and plugs.get(a.name, True))}
 
 
 def run_field(script: str | Path | dict, dod: float, seed: int, q_table: str | Path | None, *, label: str = "",
@@ -95,7 +111,7 @@ def run_field(script: str | Path | dict, dod: float, seed: int, q_table: str | P
     stand = StandinRobot(cfg, raw, seed=seed, time_scale=0.0, scenario=sc)
     url = stand.start()
     bridge = PepperBridge(cfg, LinkSettings(url=url), sc)
-    res = FieldResult(label, dod, seed)
+    res = FieldResult(label, dod, seed, roles=charging_roles(cfg, sc))
     try:
         if not bridge.start(10.0):
             raise RobotUnavailable(f"stand-in at {url} not reachable")
@@ -132,7 +148,7 @@ def format_table(res: FieldResult) -> list[str]:
                      f"{r['proposal'] or '-':<8}")
     s = res.summary()
     lines.append(f"satisfied {s['satisfied']}/{s['intentions']}  HSR {s['hsr'] if s['hsr'] is None else round(s['hsr'], 3)}"
-                 f"  first Attach {s['first_attach'] or '-'}")
+                 f"  first plug-in {s['first_attach'] or '-'}")
     return lines
 
 
@@ -181,7 +197,7 @@ def main(argv=None) -> int:
         print(json.dumps([{"seed": p[0].seed, "robots": [{"summary": r.summary(), "log": r.log} for r in p]} for p in out],
                          indent=1))
     else:
-        print("first Attach: the interaction at which the robot first asked to be plugged in (- = never)")
+        print("first plug-in: the interaction at which the robot first asked to be plugged in (- = never)")
         print(f"{'seed':>4}  {'dedicated sat.':>14} {'selfish sat.':>12}  {'ded. attach':>11} {'self. attach':>12}")
         for p in out:
             d, s = p[0].summary(), p[1].summary()

@@ -286,12 +286,23 @@ def _script_path(s: str) -> Path:
     return p.resolve()
 
 
-def field_result(run: dict, seed: int, default_dod: float | None = None):
+def field_result(run: dict, seed: int, default_dod: float | None = None, roles: dict | None = None):
     from .field import FieldResult
 
     log = (run["status"].get("extra") or {}).get("log") or []
     dod = run["dod"] if run["dod"] is not None else default_dod
-    return FieldResult(run["label"], dod, seed, log=list(log), user_log=list(run["user_log"]))
+    return FieldResult(run["label"], dod, seed, log=list(log), user_log=list(run["user_log"]), roles=roles or {})
+
+
+def _roles(a) -> dict:
+    """The field summary's charging roles for this run's config and scenario."""
+    from homeo_decision.scenario import load_scenario
+    from pepper_bridge.config import load_config
+
+    from .field import charging_roles
+
+    sc = load_scenario(a.scenario)
+    return charging_roles(load_config(a.config, scenario=sc), sc)
 
 
 # -- command line ------------------------------------------------------------------------------
@@ -420,7 +431,7 @@ def _cmd_one(a, base: Path) -> int:
             return 130
     from homeo_decision.scenario import load_scenario
 
-    res = field_result(run, a.seed, float(load_scenario(a.scenario).learning["dod"]))
+    res = field_result(run, a.seed, float(load_scenario(a.scenario).learning["dod"]), roles=_roles(a))
     st = run["status"]
     if a.json:
         out = {"seed": a.seed, "dod": res.dod, "url": (st.get("extra") or {}).get("robot", {}).get("url"),
@@ -471,7 +482,7 @@ def _cmd_field(a, base: Path) -> int:
         if not a.json and not a.quiet:
             print(f"{PROG}: {label} robot (DoD {dod}) through the graph", file=sys.stderr)
         run = run_robot(a, label, dod, tables[label], d)
-        results.append(field_result(run, a.seed))
+        results.append(field_result(run, a.seed, roles=_roles(a)))
     if a.json:
         print(json.dumps({"seed": a.seed, "robots": [{"summary": r.summary(), "log": r.log} for r in results]},
                          indent=1))

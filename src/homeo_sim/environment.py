@@ -56,11 +56,14 @@ class SimEnvironment:
         h = self.human
         h.advance(self.world.code)
         self.world.set_human(h.present, h.intention)
-        self._cues = h.observe() if self.cues else None  # how the human shows its wish this tick
+        cues = h.observe() if self.cues else None  # how the human shows its wish this tick
+        self._obs = Observation(self._unseen[self.world.code], self.body.values, h.intention, cues)
 
     def observe(self) -> Observation:
-        """The body is the live list of readings (read it before the next ``step``)."""
-        return Observation(self._unseen[self.world.code], self.body.values, self.human.intention, self._cues)
+        """What the robot can sense now. The record is the environment's own, updated in place by
+        ``step`` (the per-tick path), and its body is the live list of readings: take it in (or
+        copy it) before the next ``step``."""
+        return self._obs
 
     def step(self, action: int | None) -> Outcome:
         world, body = self.world, self.body
@@ -76,7 +79,9 @@ class SimEnvironment:
         h = self.human  # _advance_human, inlined: once per tick
         h.advance(world.code)
         world.set_human(h.present, h.intention)
+        o = self._obs  # the record of the new tick (see observe)
+        o.code, o.intention = self._unseen[world.code], h.intention
         if self.cues:
-            self._cues = h.observe()
+            o.cues = h.observe()
         self.tick += 1
         return Outcome(action, resp.feedback, resp.proposal, resp.clarified, after, it, resp.satisfied)
