@@ -76,7 +76,7 @@ class DecisionCore(Perceiving):
                         pseudo_update=L["pseudo_update"] if pseudo_update is None else pseudo_update,
                         feedback_value=sc.feedback_value if feedback_value is None else feedback_value,
                         feedback=feedback)
-        self._phase_t, self._phase = -1, self.schedule[0]
+        self._phase_from, self._phase_until, self._phase = 0, -1, self.schedule[0]  # empty: computed at first use
         self.reseed(seed)
 
     def set_params(self, *, dod=None, xi=None, gamma=None, pseudo_update=None, feedback_value=None, feedback=None) -> None:
@@ -102,9 +102,13 @@ class DecisionCore(Perceiving):
             self.use_feedback = bool(feedback)
 
     def phase(self, t: int):
-        """The alpha/tau phase of tick t (cached: select and learn ask for the same tick)."""
-        if t != self._phase_t:
-            self._phase_t, self._phase = t, phase_at(self.schedule, t)
+        """The alpha/tau phase of tick t, cached over the ticks it spans (learning asks for t-1 and
+        selection for t, every tick)."""
+        if not self._phase_from <= t < self._phase_until:
+            ph = self._phase = phase_at(self.schedule, t)
+            later = [p.start for p in self.schedule if p.start > ph.start]
+            self._phase_from = ph.start if t >= ph.start else t  # before the first phase: that tick only
+            self._phase_until = min(later) if later else float("inf")
         return self._phase
 
     def reseed(self, seed: int) -> None:

@@ -8,6 +8,8 @@ integer: ``(m_dom * n_hum + hum) * n_states_o + object_state``.
 from __future__ import annotations
 
 import math
+from bisect import bisect_right
+from itertools import accumulate
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -46,17 +48,13 @@ def softmax_pick(values: Sequence[float], actions: Sequence[int], tau: float, u:
     """Eq 3.17 sampling: the action whose cumulative softmax weight first exceeds ``u`` in [0, 1).
 
     Shifting every value by the maximum leaves the probabilities unchanged and avoids overflow.
+    The cumulative weights are summed left to right (``accumulate``), as a loop would.
     """
     top = max(values)
     exp = math.exp
-    ex = [exp((v - top) / tau) for v in values]
-    x = u * sum(ex)
-    acc = 0.0
-    for a, e in zip(actions, ex):
-        acc += e
-        if x < acc:
-            return a
-    return actions[-1]
+    cum = list(accumulate([exp((v - top) / tau) for v in values]))
+    i = bisect_right(cum, u * cum[-1])
+    return actions[i] if i < len(actions) else actions[-1]
 
 
 class ObjectQ:
@@ -137,8 +135,10 @@ class ObjectQ:
         q = self.q
         v = max(q[o_i][s2[o_i]])
         for m in self.others[o_i]:
-            qm = q[m]
-            v += max(qm[s2[m]]) - max(qm[s[m]])
+            sm, sm2 = s[m], s2[m]
+            if sm != sm2:  # an object whose reduced state did not change adds exactly 0
+                qm = q[m]
+                v += max(qm[sm2]) - max(qm[sm])
         return v
 
     def update(self, action: int, s: Sequence[int], r: float, s2: Sequence[int], alpha: float, gamma: float, code: int, code2: int) -> float:

@@ -13,8 +13,8 @@ def drive_reward(before: Sequence[float], after: Sequence[float], weights: Seque
     ``k`` is the index of the drive of the dominant motivation (Eq 3.21's Kronecker delta).
     """
     r = 0.0
-    for i in range(len(before)):
-        term = weights[i] * (before[i] - after[i])
+    for i, (w, b, a) in enumerate(zip(weights, before, after)):
+        term = w * (b - a)
         r += term * (1.0 + xi) if i == k else term
     return r
 

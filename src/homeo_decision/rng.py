@@ -28,11 +28,11 @@ class UniformStream:
         self.rng = component_rng(seed, component)
         self._block = block
         self._buf: list[float] = []
-        self._i = 0
+        self._i = block  # past the end: the first draw fills the buffer
 
     def random(self) -> float:
         i = self._i
-        if i >= len(self._buf):
+        if i >= self._block:  # the buffer always holds exactly one block
             self._buf = self.rng.random(self._block).tolist()
             i = 0
         self._i = i + 1

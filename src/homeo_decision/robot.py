@@ -99,7 +99,8 @@ class Perception:
             if out.action is not None:
                 m.apply_action(self.prev_code, out.action)  # Table 4.1, in the world the robot perceived
             fb = out.feedback
-            m.apply_feedback(fb)  # Section 4.2.1: praise -10, a scolding by an open amount
+            if fb:
+                m.apply_feedback(fb)  # Section 4.2.1: praise -10, a scolding by an open amount
             if self.keep_after:
                 if out.body is not None:
                     m.set_body(out.body)
@@ -155,6 +156,8 @@ class Robot:
         self.decision = Decision(policy)
         self.policy = policy
         self.recognised = None  # the recognition of the current tick
+        # the oracle's recognition is a lookup of the observed intention: done here, per tick
+        self._seen = recognition._seen if type(recognition) is OracleRecognition else None
 
     def restart(self, initial=None) -> None:
         self.recognition.restart()
@@ -162,7 +165,8 @@ class Robot:
         self.decision.restart()
 
     def step(self, t: int, obs: Observation, out: Outcome | None, final: bool = False) -> int | None:
-        r = self.recognised = self.recognition.tick(obs, out)
+        seen = self._seen
+        r = self.recognised = seen[obs.intention] if seen is not None else self.recognition.tick(obs, out)
         per = self.perception
         perceived = per.tick(obs.code, r.intention, obs.body, out)
         return self.decision.tick(t, perceived, out, per.after_action, final)

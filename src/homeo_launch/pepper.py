@@ -42,7 +42,8 @@ from .sim import DISCOVERY_TIMEOUT_S, PROG, GraphError, Monitor, check_alive, wa
 BRIDGE_NODES = G.GRAPHS["pepper"]
 STANDIN_START_S = 30.0
 FIELD_DODS = (("dedicated", 0.25), ("selfish", 0.0))
-INTENTION_MODES = {"cues": G.ORACLE, "bayes": G.BAYES}  # --intention -> the intention node's mode
+# --intention -> the intention node's mode: the config's cues name the intention (read by the oracle)
+INTENTION_MODES = {"cues": G.ORACLE, G.BAYES: G.BAYES}
 
 
 def endpoints(intention: str) -> dict:
@@ -322,7 +323,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--q-table", metavar="FILE", help="the decision node loads this Q-table at start "
                    "(with --field: one table for both robots)")
     p.add_argument("--dod", type=float_in(0.0, 1.0), default=None, help="Degree of Dedication (Eq 3.27)")
-    p.add_argument("--intention", choices=("cues", "bayes"), default="cues",
+    p.add_argument("--intention", choices=tuple(INTENTION_MODES), default="cues",
                    help="cues (default): the config's keyword/gesture cues name the intention (the intention node in "
                         "oracle mode; as homeo-pepper-field); bayes: the Bayesian recogniser on the raw cues")
     p.add_argument("--interactions", type=int_at_least(0), default=0,

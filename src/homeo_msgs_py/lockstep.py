@@ -104,8 +104,9 @@ class LockstepDriver:
 
     def __init__(self, side: WorldSide, send: Callable, *, iterations: int, rate: float = 0.0, timeout: float = 5.0,
                  run_async: Callable | None = None, log: Callable[[str], None] | None = None,
-                 clock: Callable[[], float] = time.monotonic):
+                 note: Callable[[str], None] | None = None, clock: Callable[[], float] = time.monotonic):
         self.side, self.send = side, send
+        self.note = note or (lambda what: None)  # counted events: "missed ticks", "missed drives"
         self.iterations, self.rate, self.timeout = iterations, rate, timeout
         self.run_async, self.log, self.clock = run_async, log or (lambda text: None), clock
         self.run = 0
@@ -162,6 +163,7 @@ class LockstepDriver:
         elif kind == "observe":
             if err is not None:
                 self.phase, self._retry_at = "retry", now + RETRY_S
+                self.note("reads retried")
                 self.log(f"observing tick {self.tick} failed ({err}); retrying")
                 return
             world, seen = res
@@ -196,9 +198,12 @@ class LockstepDriver:
         if self.state in (RUNNING, FINISHING) and self.phase == "act" and self._action is None \
                 and now - self._since > self.timeout:
             if self.state == FINISHING:
+                self.note("missed drives")
+                self.log(f"no final message within {self.timeout:g} s: the run ends with the drives it has")
                 self._finish()
                 return
             self.missed += 1
+            self.note("missed ticks")
             self.log(f"no action for tick {self.tick} within {self.timeout:g} s: counted as no action")
             self._step(None)
 
@@ -250,6 +255,11 @@ class LockstepDriver:
         self.log(f"run {self.run} done: {self.tick} ticks, {self.missed} missed")
         if self.on_done is not None:
             self.on_done()
+
+    @property
+    def last_action(self) -> dict | None:
+        """The fields of the last action message taken (the one being performed during a step)."""
+        return self._last_fields
 
     def set_rate(self, rate: float) -> None:
         self.rate = rate

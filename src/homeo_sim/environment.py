@@ -12,7 +12,7 @@ from homeo_decision.environment import Observation, Outcome
 from homeo_decision.scenario import Scenario
 
 from .body import SimBody
-from .human import NO_RESPONSE, SimHuman
+from .human import SimHuman
 from .world import World
 
 
@@ -67,14 +67,14 @@ class SimEnvironment:
 
     def step(self, action: int | None) -> Outcome:
         world, body = self.world, self.body
-        it = self.human.intention
         if action is not None:
             before = world.execute(action)
             body.apply_action(before, action)
-            resp = self.human.respond(action)
-        else:
-            resp = NO_RESPONSE
-        after = list(body.values) if self.keep_after else None
+            out = self.human.respond(action)
+        else:  # nothing happened for the human to answer
+            out = Outcome(None, 0, None, None, None, self.human.intention, False)
+        if self.keep_after:
+            out.body = list(body.values)
         body.apply_time()
         h = self.human  # _advance_human, inlined: once per tick
         h.advance(world.code)
@@ -84,4 +84,4 @@ class SimEnvironment:
         if self.cues:
             o.cues = h.observe()
         self.tick += 1
-        return Outcome(action, resp.feedback, resp.proposal, resp.clarified, after, it, resp.satisfied)
+        return out

@@ -11,26 +11,14 @@ habits (the scenario's ``observations.habits``, not the network's textbook prior
 replaced by uniform noise with probability ``<channel>_noise``. These draws use their own
 "observation" stream, so the "human" stream, and with it every oracle-mode result, does
 not depend on them. ``intention_reveal`` says which responses reveal the true intention
-(``Response.clarified``).
+(``Outcome.clarified``).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
+from homeo_decision.environment import Outcome
 from homeo_decision.rng import UniformStream
 from homeo_decision.scenario import OBS_CHANNELS, Scenario, ScenarioError
-
-
-@dataclass(slots=True)
-class Response:
-    feedback: int  # +1 / -1 / 0
-    proposal: int | None  # action id
-    satisfied: bool
-    clarified: int | None = None  # the intention (index) this response reveals, None if it reveals none
-
-
-NO_RESPONSE = Response(0, None, False)
 
 
 class SimHuman:
@@ -80,14 +68,16 @@ class SimHuman:
             valid = self.reasonable[self.with_presence[code][0]]
             self.intention = valid[self.rng.index(len(valid))] if valid else 0
 
-    def respond(self, action: int) -> Response:
-        """Lines 8-19: feedback (and a proposal on a miss) for the robot's action."""
+    def respond(self, action: int) -> Outcome:
+        """Lines 8-19: feedback (and a proposal on a miss) for the robot's action. The answer is the
+        tick's outcome record (the environment adds what the action did to the body), with the
+        human's truth for the metrics."""
         it = self.intention
         if it == 0:
-            return NO_RESPONSE
+            return Outcome(action, 0, None, None, None, 0, False)
         if action in self.desired[it]:
             self.satisfied = True
-            return Response(1, None, True, it if self.reveal == "feedback" else None)
+            return Outcome(action, 1, None, it if self.reveal == "feedback" else None, None, it, True)
         proposal = None
         if self.rng.random() < self.p_propose:
             options = self.desired_order[it]
@@ -101,7 +91,7 @@ class SimHuman:
                 proposal = named if named in options else options[0]
         # a proposal names a desired action, so it tells the robot what the human meant
         clarified = it if proposal is not None and self.reveal != "never" else None
-        return Response(-1, proposal, False, clarified)
+        return Outcome(action, -1, proposal, clarified, None, it, False)
 
     def observe(self, with_intention: bool = False) -> dict:
         """What the robot sees of the human this tick: one symbol per channel (and, for the

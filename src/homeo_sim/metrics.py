@@ -27,6 +27,19 @@ class MetricRecorder:
         self._expressed.append(expressed)
         self._satisfied.append(satisfied)
 
+    def follow(self, perception, after_action: bool = False) -> "MetricRecorder":
+        """Record from a robot's perception in ``on_tick`` (``robot.run_loop``'s hook): its drives after
+        each tick, or right after the action (the open choice ``metrics_sample``)."""
+        self._perception, self._after_action = perception, after_action
+        return self
+
+    def on_tick(self, t, p, r, a, out) -> None:
+        """``run_loop``'s hook: d(t) from the followed perception, the truth from the outcome."""
+        per = self._perception
+        self._drives.extend(per.after_action if self._after_action else per.drives)
+        self._expressed.append(out.true_intention != 0)
+        self._satisfied.append(out.satisfied)
+
     @property
     def n(self) -> int:
         return len(self._expressed)

@@ -23,7 +23,7 @@ from std_srvs.srv import Trigger
 
 from homeo_decision.node_runtime import ScenarioNode, run_scenario_node
 from homeo_msgs_py.graph import NODES, TOPICS, readers
-from homeo_msgs_py.lockstep import DONE, FINISHING, RUNNING, WAITING, LockstepDriver
+from homeo_msgs_py.lockstep import DONE, RUNNING, WAITING, LockstepDriver
 from homeo_msgs_py.node_base import NodeConfigError
 
 from .world_side import SimWorldSide
@@ -59,7 +59,7 @@ class SimNode(ScenarioNode):
         self.side = SimWorldSide(self.sc, p("seed").value, self.learning, self._open_trace(p("trace_path").value))
         self.pubs = {key: self.publisher(key) for key in DESC.publishes}
         self.driver = LockstepDriver(self.side, self._send, iterations=p("iterations").value, rate=p("rate").value,
-                                     timeout=p("action_timeout").value, log=self._log)
+                                     timeout=p("action_timeout").value, log=self._log, note=self.rejects.note)
         self.driver.on_done = self._publish_status
         self.add_on_set_parameters_callback(self._on_params)
         self.subscribe("action", self.driver.on_action)
@@ -72,11 +72,7 @@ class SimNode(ScenarioNode):
         self.send(self.pubs[key], tick, fields, run)
 
     def _log(self, text: str) -> None:
-        if text.startswith("no action"):
-            self.rejects.note("missed ticks")
-            self.get_logger().warning(text)
-        else:
-            self.get_logger().info(text)
+        self.get_logger().info(text)
 
     # -- parameters -------------------------------------------------------------------
     def _on_params(self, params) -> SetParametersResult:
@@ -124,8 +120,6 @@ class SimNode(ScenarioNode):
                 self._wait_logged = time.monotonic()
                 self.get_logger().info("waiting for the graph: " + "; ".join(missing))
             return
-        if drv.state == FINISHING and drv.phase == "act" and time.monotonic() - drv._since > drv.timeout:
-            self.rejects.note("missed drives")
         drv.poll()
         if drv.state == DONE and self.side.trace is not None:
             self.side.trace.flush()

@@ -93,18 +93,17 @@ class Simulation:
     def run(self, iterations: int, trace: TextIO | None = None, on_tick: Callable[[int], None] | None = None,
             keep_actions: bool = False) -> EpisodeResult:
         sc, robot = self.sc, self.robot
-        rec = MetricRecorder(sc.drive_names, [d.threshold for d in sc.drives])
-        record = rec.record
-        per = robot.perception
         # d(t) of the metrics: after the whole iteration, or before the time increase (open choice)
-        sample_after = sc.open["metrics_sample"] == "after_action"
+        rec = MetricRecorder(sc.drive_names, [d.threshold for d in sc.drives]).follow(
+            robot.perception, sc.open["metrics_sample"] == "after_action")
+        record = rec.on_tick
         bayes = self.cfg.intention == BAYES
         actions: list = []
         hits: list = []
         dec = robot.decision
 
         def tick(t, p, r, a, out):
-            record(per.after_action if sample_after else per.drives, out.true_intention != 0, out.satisfied)
+            record(t, p, r, a, out)
             if bayes:
                 hits.append(r.intention == out.true_intention)
             if keep_actions:
@@ -115,9 +114,7 @@ class Simulation:
                 on_tick(t)
 
         fast = not (bayes or keep_actions or trace is not None or on_tick is not None)
-        run_loop(self.env, robot, iterations, self.env.observe(),
-                 (lambda t, p, r, a, out: record(per.after_action if sample_after else per.drives,
-                                                 out.true_intention != 0, out.satisfied)) if fast else tick)
+        run_loop(self.env, robot, iterations, self.env.observe(), record if fast else tick)
         metrics = rec.summary()
         if bayes:
             metrics["intention_accuracy"] = accuracy_ends(hits)
