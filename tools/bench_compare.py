@@ -1,11 +1,13 @@
 """Core loop speed of this checkout against another git revision, measured in one run.
 
-    python tools/bench_compare.py REV [--rounds 9] [--iterations 20000]
+    python tools/bench_compare.py REV [--rounds 9] [--iterations 20000] [--instructions]
 
 Checks REV out into a temporary worktree and alternates fresh processes of the two (this machine
 is shared and noisy: single runs vary by +-30%), in ABBA order, each the best of 5 episodes of
 ``homeo-sim run``'s default setting in CPU time; prints every round's iterations/s and the ratio of
-the medians.
+the medians. ``--instructions`` counts instructions per iteration instead, with valgrind's
+callgrind (repeatable whatever else the machine does: the difference of a 11000- and a
+1000-iteration episode, PYTHONHASHSEED fixed).
 """
 
 from __future__ import annotations
@@ -30,17 +32,40 @@ def rate(src: Path, n: int) -> float:
     return float(out.stdout)
 
 
+def instructions(src: Path, n: int) -> int:
+    code = ("from homeo_sim.runner import RunConfig, run_episode\nfrom homeo_decision.scenario import load_scenario\n"
+            f"run_episode(RunConfig(iterations={n}, seed=0), load_scenario())")
+    with tempfile.NamedTemporaryFile() as out:
+        r = subprocess.run(["valgrind", "--tool=callgrind", "--trace-children=yes", f"--callgrind-out-file={out.name}",
+                            sys.executable, "-c", code], capture_output=True, text=True,
+                           env={"PYTHONPATH": str(src), "PATH": "/usr/bin:/bin", "PYTHONHASHSEED": "0",
+                                "PYTHONDONTWRITEBYTECODE": "1"})  # the same start-up in both runs
+    counts = [int(x.split(":")[1]) for x in r.stderr.splitlines() if "Collected :" in x for x in [x.split("==")[-1]]]
+    if not counts:
+        raise SystemExit(f"valgrind gave no count: {r.stderr[-300:]}")
+    return counts[-1]
+
+
+def per_iteration(src: Path) -> float:
+    return (instructions(src, 11000) - instructions(src, 1000)) / 10000
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("rev")
     ap.add_argument("--rounds", type=int, default=9)
     ap.add_argument("--iterations", type=int, default=20000)
+    ap.add_argument("--instructions", action="store_true", help="count instructions (callgrind) instead of timing")
     a = ap.parse_args()
     with tempfile.TemporaryDirectory(prefix="homeo-bench-") as tmp:
         wt = Path(tmp) / "rev"
         subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(wt), a.rev], check=True,
                        capture_output=True)
         try:
+            if a.instructions:
+                b, h = per_iteration(wt / "src"), per_iteration(ROOT / "src")
+                print(f"instructions per iteration: {a.rev} {b:,.0f}, this checkout {h:,.0f}; this/rev = {h / b:.3f}")
+                return 0
             runs = {"rev": [], "here": []}
             for r in range(a.rounds):
                 order = (("rev", wt / "src"), ("here", ROOT / "src"))

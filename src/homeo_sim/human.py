@@ -66,7 +66,7 @@ class SimHuman:
                 return
             # judged in the world as it is with the human present (a returning human can want 'come')
             valid = self.reasonable[self.with_presence[code][0]]
-            self.intention = valid[self.rng.index(len(valid))] if valid else 0
+            self.intention = valid[int(self.rng.random() * len(valid))] if valid else 0  # UniformStream.index, inlined
 
     def respond(self, action: int) -> Outcome:
         """Lines 8-19: feedback (and a proposal on a miss) for the robot's action. The answer is the
