@@ -29,6 +29,7 @@ from .monitor import DISCOVERY_TIMEOUT_S, GraphError, Monitor, check_alive, wait
 from .processes import Graph, NodeSpec, dds_defaults, graph_env
 
 PROG = "homeo-launch"
+INTERRUPT_STATUS_S = 2.0  # on Ctrl-C, how long to wait for the run's status when none came yet
 
 
 @dataclass
@@ -111,6 +112,15 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
             if not ok:
                 raise GraphError(f"saving the Q-table failed: {msg}")
         return out
+    except KeyboardInterrupt:
+        # the run so far: the status is latched, so a launcher whose node has not heard it yet gets it now
+        if mon is not None and last is not None and not last.get("metrics"):
+            end = time.monotonic() + INTERRUPT_STATUS_S
+            while time.monotonic() < end and not (mon.status and mon.status.fields.get("metrics")):
+                mon.spin(0.05)
+            if mon.status is not None:
+                last.update(mon.status.fields)
+        raise
     finally:
         if mon is not None:
             mon.close()
