@@ -112,7 +112,8 @@ class StandinRobot:
         plug_obj = self.cfg.plug["variable"].partition(".")[0] if self.cfg.plug else None
         self.user = ScriptedUser(self.script, desired, self.cfg.gesture_event, self.cfg.movement_event,
                                  plug_actions=self.cfg.plug_actions(),
-                                 plug_place=(scenario.objects.get(plug_obj) or {}).get("location"))
+                                 plug_place=(scenario.objects.get(plug_obj) or {}).get("location"),
+                                 emotion_scale=self.cfg.emotion_scale)
         self.phrases = self.cfg.phrase_actions()
         self._last = clock()
         self.session: qi.Session | None = None
@@ -308,7 +309,7 @@ class StandinRobot:
                 if "presence" in e:
                     self.user.present = e["presence"] == "present"
                     self._publish()
-            self.emit(timed_entry_emits(e, self.cfg.gesture_event, self.cfg.movement_event))
+            self.emit(timed_entry_emits(e, self.cfg.gesture_event, self.cfg.movement_event, self.cfg.emotion_scale))
 
     # -- services -------------------------------------------------------------------
     def _make_services(self) -> dict:
