@@ -49,6 +49,7 @@ class PepperBridge:
         self.diagnostics = ev.Diagnostics()
         self.parser = ev.EventParser(self.cfg, self.words, self.events, self.diagnostics)
         self.link = NaoqiLink(self.settings, self.parser.keys, self.parser, self._on_status, self._on_connect)
+        self.link.heartbeat = ("ALMemory", "getData", BATTERY_KEY)  # a documented read every robot answers
         self._lock = threading.Lock()
         # what the bridge knows of the world beyond the sensors
         self.location = self.cfg.start_location
@@ -93,6 +94,8 @@ class PepperBridge:
     def _on_status(self, st: dict) -> None:  # supervisor thread
         if st["state"] == "disconnected":
             self.diagnostics.incident("link_down", st["reason"])
+        elif st["state"] == "unresponsive":
+            self.diagnostics.incident("robot_unresponsive", st["reason"])
         self.events.put(ev.BridgeEvent(ev.STATUS, st, "link"))
 
     def _on_connect(self, link: NaoqiLink) -> None:  # supervisor thread, after (re)connection
@@ -246,15 +249,16 @@ class PepperBridge:
 
         if action not in self.sc.action_names:
             raise ValueError(f"unknown action {action!r}; known: {', '.join(self.sc.action_names)}")
+        unavailable = False
         try:
             ok = self._do(action, call)
             reason = None if ok else "the robot reported failure"
-        except RobotUnavailable as exc:
-            ok, reason = False, str(exc)
+        except RobotUnavailable as exc:  # away, frozen or silent: the action's tick is missed
+            ok, reason, unavailable = False, str(exc), True
         except RuntimeError as exc:
             ok, reason = False, str(exc).strip().splitlines()[0] if str(exc).strip() else "robot error"
             self.diagnostics.incident(f"action {action}", reason)
-        return {"action": action, "ok": ok, "reason": reason, "calls": calls}
+        return {"action": action, "ok": ok, "reason": reason, "calls": calls, "unavailable": unavailable}
 
     def _do(self, action: str, call) -> bool:
         spec = self.cfg.actions.get(action)

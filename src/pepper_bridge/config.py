@@ -293,4 +293,8 @@ class LinkSettings:
     backoff_max: float = 10.0
     backoff_factor: float = 2.0
     poll_period: float = 0.1  # polling of event keys where ALMemory.subscriber is refused
+    call_timeout: float = 3.0  # a read (or subscribe) the robot does not answer in this time fails
+    action_timeout: float = 60.0  # a move, rest or speech call fails after this
+    heartbeat_period: float = 1.0  # how often the robot is asked something when nothing else is going on
+    heartbeat_timeout: float = 2.0  # no answer for this long, connection open: the robot is unresponsive
     battery_source: str = "memory"  # "memory" (0..1 fraction key) or "albattery" (percent)

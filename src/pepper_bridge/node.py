@@ -278,7 +278,7 @@ class BridgeNode(ScenarioNode):
         link = self.link
         values = {"state": str(link.get("state")), "connected": str(bool(link.get("connected"))).lower(),
                   "url": str(link.get("url")), "reason": str(link.get("reason")), "connects": str(link.get("connects")),
-                  "drops": str(link.get("drops")), "polled_keys": str(len(link.get("polled_keys") or [])),
+                  "drops": str(link.get("drops")), "freezes": str(link.get("freezes", 0)), "polled_keys": str(len(link.get("polled_keys") or [])),
                   "rejected_total": str(snap["rejected_total"])}
         values.update({f"rejected {s}": str(n) for s, n in sorted(snap["rejected_by_source"].items())})
         values.update({f"incident {s}": str(n) for s, n in sorted(snap["incidents"].items())})

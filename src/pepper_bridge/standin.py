@@ -23,8 +23,10 @@ help at the charger; moving away unplugs it); heat rises ``heat_per_m`` per metr
 status is floor(heat) (0..3), the other joints' floor(heat / 2).
 
 Every call received is recorded (``calls()``), memory keys can be forced to wrong values
-(``inject``), and the robot can disappear and come back on the same URL (``drop`` /
-``restart``).
+(``inject``), the robot can disappear and come back on the same URL (``drop`` /
+``restart``), and it can freeze: stop answering with its connection open (``freeze_for``:
+every NAOqi call and event waits until it thaws; ``HomeoStandin`` still answers).
+:class:`NotNaoqiPort` is a loopback port that accepts connections but does not speak qi.
 """
 
 from __future__ import annotations
@@ -119,6 +121,8 @@ class StandinRobot:
         self.session: qi.Session | None = None
         self.url: str | None = None
         self._stop = threading.Event()
+        self._thawed = threading.Event()  # cleared while frozen
+        self._thawed.set()
         self._timed_thread: threading.Thread | None = None
         self._services = self._make_services()
 
@@ -164,11 +168,25 @@ class StandinRobot:
 
     def close(self) -> None:
         self._stop.set()
+        self._thawed.set()  # release held calls
         self.drop()
 
     # -- recording and injection ----------------------------------------------------
     def record(self, service: str, method: str, *args) -> None:
+        """Every NAOqi method starts here: a frozen robot holds the call until it thaws."""
+        self._thawed.wait()
         self._calls.append((service, method, list(args)))
+
+    def freeze_for(self, seconds: float) -> None:
+        """Stop answering (connection open) for ``seconds`` wall seconds; thaws by itself."""
+        self._thawed.clear()
+        t = threading.Timer(seconds, self._thawed.set)
+        t.daemon = True
+        t.start()
+
+    @property
+    def frozen(self) -> bool:
+        return not self._thawed.is_set()
 
     def calls(self, service: str | None = None, exclude_memory_reads: bool = True) -> list:
         out = list(self._calls)
@@ -265,6 +283,7 @@ class StandinRobot:
     # -- events ---------------------------------------------------------------------
     def emit(self, emits) -> None:
         """Raise events (set the key, then fire the subscribers' signals) outside the lock."""
+        self._thawed.wait()  # a frozen robot raises nothing
         fire = []
         with self.lock:
             for key, value in emits:
@@ -485,6 +504,10 @@ class StandinRobot:
             def dropFor(self, seconds):
                 threading.Timer(0.05, robot.drop_for, args=(seconds,)).start()
 
+            @qi.bind(qi.Void, [qi.Float])
+            def freezeFor(self, seconds):
+                robot.freeze_for(seconds)
+
             @qi.bind(qi.Dynamic, [])
             def state(self):
                 return robot.state()
@@ -507,6 +530,54 @@ class StandinRobot:
             emits = self._user_saw(self.cfg.move_action(loc))
         self.emit(emits)
         return True
+
+
+class NotNaoqiPort:
+    """A loopback TCP port that accepts connections but is not NAOqi: ``mode`` "silent" says
+    nothing, "http" answers like a web server. ``url`` is ``tcp://127.0.0.1:PORT``."""
+
+    def __init__(self, mode: str = "silent"):
+        import socket
+
+        self.mode = mode
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        self.sock.bind(("127.0.0.1", 0))
+        self.sock.listen(8)
+        self.sock.settimeout(0.2)
+        self.url = f"tcp://127.0.0.1:{self.sock.getsockname()[1]}"
+        self._conns: list = []
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._serve, daemon=True, name="not-naoqi")
+        self._thread.start()
+
+    def _serve(self) -> None:
+        import socket
+
+        while not self._stop.is_set():
+            try:
+                conn, _ = self.sock.accept()
+            except (socket.timeout, OSError):
+                continue
+            self._conns.append(conn)
+            if self.mode == "http":
+                try:
+                    conn.sendall(b"HTTP/1.0 200 OK\r\nContent-Type: text/plain\r\n\r\nnot a robot\n")
+                except OSError:
+                    pass
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=2.0)
+        for c in self._conns:
+            c.close()
+        self.sock.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
 
 
 def _loopback_only(url: str) -> str:
