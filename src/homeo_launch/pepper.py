@@ -444,10 +444,19 @@ def _check_args(a) -> None:
 def _row_line(r: dict) -> str:
     fb = {1: "+", -1: "-", 0: ""}.get(r["feedback"], "?")
     return (f"{r['interaction']:>3}  {r['m_dom'] or '-':<10} {r['intention'] or '-':<9} {r['action'] or '-':<8} "
-            f"{fb:>3}  {r['proposal'] or '-':<8}")
+            f"{fb:>3}  {r['proposal'] or '-':<8}  {done_note(r)}").rstrip()
 
 
-HEADER = f"{'#':>3}  {'m_dom':<10} {'intention':<9} {'action':<8} {'fb':>3}  {'proposal':<8}"
+def done_note(r: dict) -> str:
+    """What became of the action: '' when done; 'FAILED: reason' (refused: no effect) or
+    'MISSED: reason' (robot away or unresponsive)."""
+    if r.get("ok", True) or r.get("action") is None:
+        return ""
+    why = (r.get("reason") or "").splitlines()[0][:60] if r.get("reason") else "no reason given"
+    return f"{'MISSED' if r.get('missed') else 'FAILED'}: {why}"
+
+
+HEADER = f"{'#':>3}  {'m_dom':<10} {'intention':<9} {'action':<8} {'fb':>3}  {'proposal':<8}  done"
 
 
 def cmd_pepper(a) -> int:
