@@ -183,3 +183,47 @@ def test_probe_accepts_the_standin():
         launcher.probe_robot(robot.start(), 5.0)
     finally:
         robot.close()
+
+
+# -- what the bridge sets up on the robot -----------------------------------------------------
+def test_extractors_and_speech_are_subscribed_and_unsubscribed(thesis):
+    robot = StandinRobot(CFG, None, battery=50.0, time_scale=0.0)
+    bridge = PepperBridge(CFG, LinkSettings(url=robot.start(), **FAST), thesis)
+    try:
+        assert bridge.start(10.0)
+        settle(robot)
+        calls = [(s, m, a) for s, m, a in robot.calls() if m in ("subscribe", "setLanguage", "setVocabulary")]
+        name = bridge.subscriber
+        assert name == "homeo_pepper_bridge_1"
+        assert [(s, m) for s, m, _ in calls] == [("ALPeoplePerception", "subscribe"), ("ALEngagementZones", "subscribe"),
+                                                 ("ALSpeechRecognition", "setLanguage"),
+                                                 ("ALSpeechRecognition", "setVocabulary"),
+                                                 ("ALSpeechRecognition", "subscribe"),
+                                                 ("ALVoiceEmotionAnalysis", "subscribe")]
+        assert calls[2][2] == ["English"]
+        vocab = calls[3][2][0]
+        assert "turn on the light" in vocab and "play music" in vocab
+        assert not set(vocab) & {a.lower() for a in thesis.action_names}  # words people say, no action ids
+        # after a drop: subscribed again under a fresh name
+        robot.drop_for(0.5)
+        wait_state(bridge, "disconnected", 5.0)
+        wait_state(bridge, "connected", 10.0)
+        settle(robot)
+        subs = [a[0] for s, m, a in robot.calls() if s == "ALSpeechRecognition" and m == "subscribe"]
+        assert subs == ["homeo_pepper_bridge_1", "homeo_pepper_bridge_2"]
+    finally:
+        bridge.stop()
+        unsubs = [(s, a[0]) for s, m, a in robot.calls() if m == "unsubscribe"]
+        robot.close()
+    assert unsubs == [(s, "homeo_pepper_bridge_2") for s in ("ALVoiceEmotionAnalysis", "ALSpeechRecognition",
+                                                              "ALEngagementZones", "ALPeoplePerception")]
+
+
+def test_a_spoken_phrase_is_a_proposal(pair):
+    from pepper_bridge import events as ev
+    from pepper_bridge.mapping import WORD_EVENT
+
+    robot, bridge = pair()
+    robot.raise_event(WORD_EVENT, ["play music", 0.8, "stop the music", 0.3])
+    got = bridge.collect(0.3, 2.0)
+    assert [(e.kind, e.value) for e in got if e.kind == ev.PROPOSAL] == [(ev.PROPOSAL, "Play")]

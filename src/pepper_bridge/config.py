@@ -62,6 +62,7 @@ class PepperConfig:
     anger_threshold: float = 5.0  # anger level above this is a scolding, on the 0..emotion_scale of naoqi_version
     word_confidence: float = 0.4
     naoqi_version: str = DEFAULT_NAOQI  # which documented formats the robot speaks (e.g. the emotion scale)
+    speech_language: str = "English"  # ALSpeechRecognition.setLanguage ('' = leave the robot's)
     proposals: dict = field(default_factory=dict)
     keywords: dict = field(default_factory=dict)
     gesture_event: str = "PepperBridge/Gesture"
@@ -174,6 +175,8 @@ def config_from_dict(raw: Any, source: str = "<memory>", scenario=None) -> Peppe
     v = raw.get("anger_threshold", 5.0)
     if not _is_number(v) or not 0.0 <= v < scale:
         fail("anger_threshold", f"must be a number in [0, {scale}) (NAOqi {version} reports anger 0..{scale})")
+    if not isinstance(raw.get("speech_language", "English"), str):
+        fail("speech_language", "must be a language name as ALSpeechRecognition.setLanguage takes it (e.g. English)")
     v = raw.get("word_confidence", 0.4)
     if not _is_number(v) or not 0.0 <= v <= 1.0:
         fail("word_confidence", "must be a number in [0, 1]")
@@ -196,7 +199,7 @@ def config_from_dict(raw: Any, source: str = "<memory>", scenario=None) -> Peppe
         places=pl, start_location=start, navigation=nav, actions=actions, battery_drive=body["battery"],
         temperature_drive=body["temperature"], plug=plug,
         anger_threshold=float(raw.get("anger_threshold", 5.0)), word_confidence=float(raw.get("word_confidence", 0.4)),
-        naoqi_version=str(version),
+        naoqi_version=str(version), speech_language=str(raw.get("speech_language", "English")),
         proposals=dict(raw.get("proposals", {})), keywords=dict(raw.get("keywords", {})),
         gesture_event=str(raw.get("gesture_event", "PepperBridge/Gesture")),
         movement_event=str(raw.get("movement_event", "PepperBridge/Movement")),

@@ -115,7 +115,8 @@ class StandinRobot:
         self.user = ScriptedUser(self.script, desired, self.cfg.gesture_event, self.cfg.movement_event,
                                  plug_actions=self.cfg.plug_actions(),
                                  plug_place=(scenario.objects.get(plug_obj) or {}).get("location"),
-                                 emotion_scale=self.cfg.emotion_scale)
+                                 emotion_scale=self.cfg.emotion_scale,
+                                 spoken={act: phrase for phrase, act in reversed(list(self.cfg.proposals.items()))})
         self.phrases = self.cfg.phrase_actions()
         self._last = clock()
         self.session: qi.Session | None = None
@@ -469,6 +470,24 @@ class StandinRobot:
             def unsubscribe(self, name):
                 robot.record("ALSpeechRecognition", "unsubscribe", name)
 
+        class ALPeoplePerception:  # an extractor (ALExtractor API): subscribe / unsubscribe
+            @qi.bind(qi.Void, [qi.String])
+            def subscribe(self, name):
+                robot.record("ALPeoplePerception", "subscribe", name)
+
+            @qi.bind(qi.Void, [qi.String])
+            def unsubscribe(self, name):
+                robot.record("ALPeoplePerception", "unsubscribe", name)
+
+        class ALEngagementZones:
+            @qi.bind(qi.Void, [qi.String])
+            def subscribe(self, name):
+                robot.record("ALEngagementZones", "subscribe", name)
+
+            @qi.bind(qi.Void, [qi.String])
+            def unsubscribe(self, name):
+                robot.record("ALEngagementZones", "unsubscribe", name)
+
         class ALVoiceEmotionAnalysis:
             @qi.bind(qi.Void, [qi.String])
             def subscribe(self, name):
@@ -518,7 +537,8 @@ class StandinRobot:
 
         return {"ALMemory": ALMemory(), "ALBattery": ALBattery(), "ALMotion": ALMotion(), "ALNavigation": ALNavigation(),
                 "ALTextToSpeech": ALTextToSpeech(), "ALSpeechRecognition": ALSpeechRecognition(),
-                "ALVoiceEmotionAnalysis": ALVoiceEmotionAnalysis(), "HomeoStandin": HomeoStandin()}
+                "ALVoiceEmotionAnalysis": ALVoiceEmotionAnalysis(), "ALPeoplePerception": ALPeoplePerception(),
+                "ALEngagementZones": ALEngagementZones(), "HomeoStandin": HomeoStandin()}
 
     def _motion(self, x: float, y: float) -> bool:
         with self.lock:

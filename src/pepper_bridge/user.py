@@ -61,6 +61,7 @@ class ScriptedUser:
     plug_actions: Mapping[str, bool] = field(default_factory=dict)  # action -> True: plug in, False: unplug
     plug_place: str | None = None  # where the plug is (None: anywhere)
     emotion_scale: int = 10  # the robot's emotion levels are integers 0..emotion_scale (NAOqi 2.5+: 10)
+    spoken: Mapping[str, str] = field(default_factory=dict)  # action -> the phrase a person says for it
     index: int = 0
     attempts: int = 0
     present: bool = True
@@ -130,7 +131,7 @@ class ScriptedUser:
                 row["feedback"] = -1
                 if it.get("propose", True):
                     prop = it.get("proposal") or self.desired[intention][0]
-                    emits.append((WORD_EVENT, [prop, 0.9]))
+                    emits.append((WORD_EVENT, [self.spoken.get(prop, prop), 0.9]))  # words, not action ids
                     row["proposal"] = prop
             self.attempts += 1
             if self.attempts >= int(it.get("patience", 1)):
