@@ -261,7 +261,13 @@ class StandinRobot:
         return {j: min(3, h if j in MOTION_JOINTS else h // 2) for j in PEPPER_JOINTS}
 
     def _publish(self) -> None:
-        """Body and presence into memory (injected keys keep their forced values)."""
+        """Body and presence into memory (injected keys keep their forced values).
+
+        Formats (docs/PEPPER.md, "NAOqi as documented"): joint temperature status 0..3
+        (http://doc.aldebaran.com/2-8/family/pepper_technical/pepper_dcm/actuator_sensor_names.html);
+        EngagementZones/PeopleInZone1..3 and PeoplePerception/PeopleList: lists of person ids
+        (http://doc.aldebaran.com/2-8/naoqi/peopleperception/alengagementzones.html); the battery
+        charge as the bridge reads it (a 0..1 fraction; no page in the corpus confirms the range)."""
         d = self.data
         d[BATTERY_KEY] = round(self.battery / 100.0, 6)
         d[PLUGGED_KEY] = self.plugged
@@ -488,6 +494,8 @@ class StandinRobot:
             def unsubscribe(self, name):
                 robot.record("ALEngagementZones", "unsubscribe", name)
 
+        # EmotionRecognized values come from user.angry_voice / calm_voice: the documented shape and
+        # scale (http://doc.aldebaran.com/2-5/naoqi/audio/alvoiceemotionanalysis.html: 0..10; 2-4: 0..5)
         class ALVoiceEmotionAnalysis:
             @qi.bind(qi.Void, [qi.String])
             def subscribe(self, name):
