@@ -146,7 +146,8 @@ def _die_with_parent() -> None:  # runs in the child before exec
 
 
 # -- is the robot there? ----------------------------------------------------------------------
-def probe_robot(url: str, bound: float, user: str | None = None, password: str | None = None) -> None:
+def probe_robot(url: str, bound: float, user: str | None = None, password: str | None = None,
+                shown: float | None = None) -> None:
     """Raise UserError (one line) unless ``url`` answers as NAOqi (an ALMemory service) within ``bound`` s:
     a malformed URL, an unknown host, a refused connection, a port that is not NAOqi, or silence."""
     import socket
@@ -203,7 +204,7 @@ def probe_robot(url: str, bound: float, user: str | None = None, password: str |
     if result.get("ok"):
         return
     raise UserError(f"cannot reach the robot at {url}: "
-                    + result.get("error", f"no answer within {bound:g} s (--connect-bound)"))
+                    + result.get("error", f"no answer within {shown or bound:g} s (--connect-bound)"))
 
 
 # -- the graph --------------------------------------------------------------------------------
@@ -471,7 +472,9 @@ def cmd_pepper(a) -> int:
         raise UserError(str(exc)) from None
     if not a.standin:
         try:
-            probe_robot(a.qi_url, a.connect_bound, a.user, a.password)  # one line and exit 2, not a silent wait
+            # one line and exit 2, not a silent wait; the bound is the whole command's: keep ~1 s for the
+            # interpreter's start and exit
+            probe_robot(a.qi_url, max(0.5, a.connect_bound - 1.0), a.user, a.password, shown=a.connect_bound)
         except UserError as exc:
             # libqi's threads may abort the interpreter's teardown after a failed session (exit -6):
             # say it in one line and leave at once
