@@ -27,8 +27,15 @@ qi.logging.setLevel(qi.logging.WARNING)
 CFG = load_config()
 
 
-def emotion(anger: float) -> list:
-    return [[2, anger], [round(1 - anger, 3), anger, 0.0, 0.0, 0.0], 0.5]
+# ALVoiceEmotionAnalysis/EmotionRecognized as documented for NAOqi 2.5 / 2.8 (levels 0..10):
+# http://doc.aldebaran.com/2-5/naoqi/audio/alvoiceemotionanalysis.html
+DOC_EXAMPLE = [[4, 3], [0, 2, 1, 3, 0], 1]  # the page's own example: sorrow 3
+ANGRY = [[2, 8], [1, 8, 0, 0, 0], 7]
+CALM = [[1, 6], [6, 1, 0, 0, 0], 1]
+
+
+def emotion(anger: int) -> list:
+    return [[2, anger], [1, anger, 0, 0, 0], 7]
 
 
 @pytest.fixture
@@ -139,10 +146,12 @@ def test_head_touch_is_positive_feedback(pair, sensor):
 
 def test_anger_above_threshold_is_negative_feedback(pair):
     robot, bridge = pair()
-    assert CFG.anger_threshold == 0.5
-    robot.raise_event(EMOTION_EVENT, emotion(0.3))  # below: nothing
-    robot.raise_event(EMOTION_EVENT, emotion(0.5))  # at the threshold: not above
-    robot.raise_event(EMOTION_EVENT, emotion(0.8))
+    assert (CFG.naoqi_version, CFG.emotion_scale, CFG.anger_threshold) == ("2.5", 10, 5)
+    robot.raise_event(EMOTION_EVENT, emotion(3))  # below: nothing
+    robot.raise_event(EMOTION_EVENT, emotion(5))  # at the threshold: not above
+    robot.raise_event(EMOTION_EVENT, DOC_EXAMPLE)  # a sad voice: not a scolding
+    robot.raise_event(EMOTION_EVENT, CALM)  # a calm voice: not a scolding
+    robot.raise_event(EMOTION_EVENT, ANGRY)
     got = wait_for(bridge, lambda e: e.kind == ev.FEEDBACK)
     got += bridge.collect(0.2, 1.0)
     assert [(e.kind, e.value) for e in got] == [(ev.FEEDBACK, -1)]
@@ -150,7 +159,7 @@ def test_anger_above_threshold_is_negative_feedback(pair):
 
 def test_spoken_proposal_with_anger(pair):
     robot, bridge = pair()
-    robot.raise_event(EMOTION_EVENT, emotion(0.9))
+    robot.raise_event(EMOTION_EVENT, ANGRY)
     robot.raise_event(WORD_EVENT, ["Play", 0.7])
     got = wait_for(bridge, lambda e: e.kind == ev.PROPOSAL)
     got += bridge.collect(0.2, 1.0)
@@ -325,7 +334,9 @@ def test_wrongly_typed_albattery_value_is_rejected(pair):
 
 @pytest.mark.parametrize("key,value", [
     (EMOTION_EVENT, "furious"),
-    (EMOTION_EVENT, [[2, 0.9], [0.1, 3.0, 0, 0, 0], 0.5]),
+    (EMOTION_EVENT, [[2, 0.9], [0.1, 0.9, 0, 0, 0], 0.5]),  # the 0..1 shape of no NAOqi version
+    (EMOTION_EVENT, [[2, 11], [1, 11, 0, 0, 0], 7]),  # above 2.5's 0..10
+    (EMOTION_EVENT, [[2, 8], [1, 8, 0, 0], 7]),  # four levels
     (WORD_EVENT, ["Play"]),
     (WORD_EVENT, [42, 0.9]),
     ("FrontTactilTouched", "yes"),

@@ -194,6 +194,15 @@ def test_failed_move_is_no_effect(world, thesis, how, reason):
     assert out.action is None and reason in out.failure
     assert env.last_row["ok"] is False and env.last_row["action"] == "MoveToH" and reason in env.last_row["reason"]
     assert view(sc, env.observe())["robot.location"] == "R"  # the robot did not move
+    from homeo_launch.pepper import _row_line, done_note  # the printed table says so
+
+    row = dict(env.last_row, m_dom="NEng", intention="come")
+    assert done_note(row).startswith("FAILED: ") and reason in done_note(row)
+    assert _row_line(row).split()[3:4] == ["MoveToH"] and "FAILED" in _row_line(row)
+    from homeo_launch.field import FieldResult, format_table
+
+    table = format_table(FieldResult("robot", 0.25, 0, log=[row], user_log=[]))
+    assert any("MoveToH" in ln and ln.endswith("FAILED") for ln in table)
 
 
 def test_no_valid_body_reading_yet_is_not_ready(world):

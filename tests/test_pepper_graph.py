@@ -119,7 +119,7 @@ def test_touch_and_angry_voice_arrive_as_feedback_on_the_outcome(live):
     robot.raise_event(TOUCH_EVENTS[0], 0.0)
     assert _outcome_of(live, w["tick"])["feedback"] == 1
     w = _next_world(live)
-    robot.raise_event(EMOTION_EVENT, [[2, 0.9], [0.1, 0.9, 0.0, 0.0, 0.0], 0.5])
+    robot.raise_event(EMOTION_EVENT, [[2, 8], [1, 8, 0, 0, 0], 7])  # angry, NAOqi 2.5's 0..10 scale
     robot.raise_event(WORD_EVENT, ["play music", 0.9])
     out = _outcome_of(live, w["tick"])
     assert out["feedback"] == -1 and out["proposal"] == "Play" and out["clarified_intention"] == "music"

@@ -144,8 +144,9 @@ def format_table(res: FieldResult) -> list[str]:
              f"{'#':>2}  {'m_dom':<10} {'intention':<9} {'action':<8} {'fb':>3}  {'proposal':<8}"]
     for r in res.log:
         fb = {1: "+", -1: "-", 0: ""}[r["feedback"]]
-        lines.append(f"{r['interaction']:>2}  {r['m_dom']:<10} {r['intention'] or '-':<9} {r['action']:<8} {fb:>3}  "
-                     f"{r['proposal'] or '-':<8}")
+        failed = "" if r.get("ok", True) or r.get("action") is None else (" MISSED" if r.get("missed") else " FAILED")
+        lines.append(f"{r['interaction']:>2}  {r['m_dom'] or '-':<10} {r['intention'] or '-':<9} {r['action'] or '-':<8} "
+                     f"{fb:>3}  {r['proposal'] or '-':<8}{failed}")
     s = res.summary()
     lines.append(f"satisfied {s['satisfied']}/{s['intentions']}  HSR {s['hsr'] if s['hsr'] is None else round(s['hsr'], 3)}"
                  f"  first plug-in {s['first_attach'] or '-'}")

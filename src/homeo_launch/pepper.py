@@ -145,6 +145,68 @@ def _die_with_parent() -> None:  # runs in the child before exec
         pass
 
 
+# -- is the robot there? ----------------------------------------------------------------------
+def probe_robot(url: str, bound: float, user: str | None = None, password: str | None = None,
+                shown: float | None = None) -> None:
+    """Raise UserError (one line) unless ``url`` answers as NAOqi (an ALMemory service) within ``bound`` s:
+    a malformed URL, an unknown host, a refused connection, a port that is not NAOqi, or silence."""
+    import socket
+    from urllib.parse import urlsplit
+
+    try:
+        u = urlsplit(url)
+        host, port = u.hostname, u.port
+    except ValueError:
+        host = port = None
+    if u.scheme not in ("tcp", "tcps") or not host or not port:
+        raise UserError(f"cannot reach the robot at {url}: not a NAOqi URL (tcp://HOST:9559 or tcps://HOST:9503)")
+    result: dict = {}
+
+    def attempt():
+        import qi
+
+        end = time.monotonic() + bound
+        try:
+            socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)
+        except socket.gaierror:
+            result["error"] = f"unknown host {host!r}"
+            return
+        except OSError as exc:
+            result["error"] = f"cannot resolve {host!r} ({exc})"
+            return
+        qi.logging.setLevel(qi.logging.ERROR)
+        s = qi.Session()
+        result["session"] = s
+        if user:
+            from pepper_bridge.naoqi_link import _AuthenticatorFactory
+
+            s.setClientAuthenticatorFactory(_AuthenticatorFactory(user, password or ""))
+        try:
+            s.connect(url, _async=True).value(max(1, int((end - time.monotonic()) * 1000)))
+        except RuntimeError as exc:
+            msg = str(exc).strip().splitlines()[0] if str(exc).strip() else "connection failed"
+            result["error"] = ("no NAOqi handshake (not a NAOqi port?)" if "timeout" in msg.lower()
+                               else f"connection failed: {msg}")
+            return
+        try:
+            s.service("ALMemory", _async=True).value(max(1, int((end - time.monotonic()) * 1000)))
+        except RuntimeError:
+            result["error"] = "it answers but offers no ALMemory service: not NAOqi"
+            return
+        result["ok"] = True
+
+    t = threading.Thread(target=attempt, daemon=True, name="robot-probe")
+    t.start()
+    t.join(bound)
+    s = result.get("session")
+    if s is not None:
+        threading.Thread(target=s.close, daemon=True).start()  # closing a half-open session may block
+    if result.get("ok"):
+        return
+    raise UserError(f"cannot reach the robot at {url}: "
+                    + result.get("error", f"no answer within {shown or bound:g} s (--connect-bound)"))
+
+
 # -- the graph --------------------------------------------------------------------------------
 def scenario_file(path: str | None, out_dir: Path, continue_schedule: bool) -> str:
     """The scenario the nodes load: the given (or thesis) one; with ``continue_schedule`` its
@@ -314,6 +376,8 @@ def add_parser(subparsers) -> None:
     src.add_argument("--qi-url", default="tcp://127.0.0.1:9559", help="the robot's NAOqi URL "
                      "(default tcp://127.0.0.1:9559; tcps://ROBOT:9503 with --user/--password)")
     src.add_argument("--standin", action="store_true", help="start a stand-in Pepper on loopback (its own process)")
+    p.add_argument("--connect-bound", type=float_in(0.5, 600.0), default=15.0,
+                   help="seconds to wait for the robot at --qi-url before giving up with exit code 2 (default 15)")
     p.add_argument("--user", help="NAOqi 2.9 user (tcps)")
     p.add_argument("--password", help="NAOqi 2.9 password (tcps)")
     p.add_argument("--script", metavar="FILE", help="the stand-in's scripted user (a path or a file of "
@@ -381,10 +445,19 @@ def _check_args(a) -> None:
 def _row_line(r: dict) -> str:
     fb = {1: "+", -1: "-", 0: ""}.get(r["feedback"], "?")
     return (f"{r['interaction']:>3}  {r['m_dom'] or '-':<10} {r['intention'] or '-':<9} {r['action'] or '-':<8} "
-            f"{fb:>3}  {r['proposal'] or '-':<8}")
+            f"{fb:>3}  {r['proposal'] or '-':<8}  {done_note(r)}").rstrip()
 
 
-HEADER = f"{'#':>3}  {'m_dom':<10} {'intention':<9} {'action':<8} {'fb':>3}  {'proposal':<8}"
+def done_note(r: dict) -> str:
+    """What became of the action: '' when done; 'FAILED: reason' (refused: no effect) or
+    'MISSED: reason' (robot away or unresponsive)."""
+    if r.get("ok", True) or r.get("action") is None:
+        return ""
+    why = (r.get("reason") or "").splitlines()[0][:60] if r.get("reason") else "no reason given"
+    return f"{'MISSED' if r.get('missed') else 'FAILED'}: {why}"
+
+
+HEADER = f"{'#':>3}  {'m_dom':<10} {'intention':<9} {'action':<8} {'fb':>3}  {'proposal':<8}  done"
 
 
 def cmd_pepper(a) -> int:
@@ -397,6 +470,17 @@ def cmd_pepper(a) -> int:
         _check_args(a)
     except (ConfigError, ScriptError) as exc:
         raise UserError(str(exc)) from None
+    if not a.standin:
+        try:
+            # one line and exit 2, not a silent wait; the bound is the whole command's: keep ~1 s for the
+            # interpreter's start and exit
+            probe_robot(a.qi_url, max(0.5, a.connect_bound - 1.0), a.user, a.password, shown=a.connect_bound)
+        except UserError as exc:
+            # libqi's threads may abort the interpreter's teardown after a failed session (exit -6):
+            # say it in one line and leave at once
+            print(f"{PROG}: error: {exc}", file=sys.stderr, flush=True)
+            sys.stdout.flush()
+            os._exit(2)
     tmp = None
     if a.log_dir:
         base = Path(a.log_dir)

@@ -32,6 +32,12 @@ from .mapping import (BATTERY_KEY, PEOPLE_KEY, PEPPER_JOINTS, PLUGGED_KEY, ZONE_
                       temperature_key)
 from .naoqi_link import CLIENT_NAME, NaoqiLink, RobotUnavailable
 
+# Extractors the bridge reads, subscribed on every connection and unsubscribed at the end: the
+# memory keys are only filled while someone subscribes (ALEngagementZones "only works if
+# ALPeoplePerception has also been subscribed to"; ALVoiceEmotionAnalysis needs
+# ALSpeechRecognition running). Order matters: people perception before the zones.
+SUBSCRIBED = ("ALPeoplePerception", "ALEngagementZones", "ALSpeechRecognition", "ALVoiceEmotionAnalysis")
+
 DeviceCallback = Callable[[str, str], None]  # (device, command), called on the caller's thread
 
 
@@ -49,7 +55,9 @@ class PepperBridge:
         self.diagnostics = ev.Diagnostics()
         self.parser = ev.EventParser(self.cfg, self.words, self.events, self.diagnostics)
         self.link = NaoqiLink(self.settings, self.parser.keys, self.parser, self._on_status, self._on_connect)
+        self.link.heartbeat = ("ALMemory", "getData", BATTERY_KEY)  # a documented read every robot answers
         self._lock = threading.Lock()
+        self.subscriber = CLIENT_NAME  # renamed on each connection
         # what the bridge knows of the world beyond the sensors
         self.location = self.cfg.start_location
         # object states as the bridge believes them ("object.variable" -> value): the scenario's
@@ -75,14 +83,17 @@ class PepperBridge:
         return self.link.start(wait)
 
     def stop(self) -> None:
+        """Unsubscribe what ``_on_connect`` subscribed (bounded calls), then close the link."""
         try:
             if self.link.connected:
-                for svc in ("ALSpeechRecognition", "ALVoiceEmotionAnalysis"):
+                for svc in reversed(SUBSCRIBED):
                     if self.link.has(svc):
-                        self.link.call(svc, "unsubscribe", CLIENT_NAME)
-        except Exception:
-            pass
-        self.link.stop()
+                        try:
+                            self.link.call(svc, "unsubscribe", self.subscriber)
+                        except RuntimeError as exc:
+                            self.diagnostics.incident(f"{svc}.unsubscribe", str(exc).splitlines()[0] if str(exc) else "")
+        finally:
+            self.link.stop()
 
     def status(self) -> dict:
         return self.link.status()
@@ -93,17 +104,30 @@ class PepperBridge:
     def _on_status(self, st: dict) -> None:  # supervisor thread
         if st["state"] == "disconnected":
             self.diagnostics.incident("link_down", st["reason"])
+        elif st["state"] == "unresponsive":
+            self.diagnostics.incident("robot_unresponsive", st["reason"])
         self.events.put(ev.BridgeEvent(ev.STATUS, st, "link"))
 
+    def vocabulary(self) -> list[str]:
+        """What people say (the config's phrases and words), never the scenario's action ids."""
+        return sorted(set(self.cfg.proposals) | set(self.cfg.keywords)
+                      | set(self.cfg.intention_cues.get("keywords", {})))
+
     def _on_connect(self, link: NaoqiLink) -> None:  # supervisor thread, after (re)connection
-        vocab = sorted(set(self.words.proposals) | set(self.words.keywords)
-                       | set(self.cfg.intention_cues.get("keywords", {})))
-        for svc, steps in (("ALSpeechRecognition", [("pause", True), ("setVocabulary", vocab, False), ("pause", False),
-                                                    ("subscribe", CLIENT_NAME)]),
-                           ("ALVoiceEmotionAnalysis", [("subscribe", CLIENT_NAME)])):
+        # a fresh subscriber name per connection: the robot may still hold the old one after a drop
+        self.subscriber = f"{CLIENT_NAME}_{link.connects}"
+        speech = [("pause", True)]
+        if self.cfg.speech_language:
+            speech.append(("setLanguage", self.cfg.speech_language))
+        speech += [("setVocabulary", self.vocabulary(), False), ("pause", False), ("subscribe", self.subscriber)]
+        steps = {"ALSpeechRecognition": speech}
+        for svc in SUBSCRIBED:
+            steps.setdefault(svc, [("subscribe", self.subscriber)])
+        for svc in SUBSCRIBED:
             if not link.has(svc):
+                self.diagnostics.incident(f"{svc} missing", "the robot does not offer it")
                 continue
-            for method, *args in steps:
+            for method, *args in steps[svc]:
                 try:
                     link.call(svc, method, *args)
                 except RuntimeError as exc:  # e.g. vocabulary refused while another app listens
@@ -246,15 +270,16 @@ class PepperBridge:
 
         if action not in self.sc.action_names:
             raise ValueError(f"unknown action {action!r}; known: {', '.join(self.sc.action_names)}")
+        unavailable = False
         try:
             ok = self._do(action, call)
             reason = None if ok else "the robot reported failure"
-        except RobotUnavailable as exc:
-            ok, reason = False, str(exc)
+        except RobotUnavailable as exc:  # away, frozen or silent: the action's tick is missed
+            ok, reason, unavailable = False, str(exc), True
         except RuntimeError as exc:
             ok, reason = False, str(exc).strip().splitlines()[0] if str(exc).strip() else "robot error"
             self.diagnostics.incident(f"action {action}", reason)
-        return {"action": action, "ok": ok, "reason": reason, "calls": calls}
+        return {"action": action, "ok": ok, "reason": reason, "calls": calls, "unavailable": unavailable}
 
     def _do(self, action: str, call) -> bool:
         spec = self.cfg.actions.get(action)

@@ -17,8 +17,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from .mapping import DEFAULT_NAOQI, emotion_scale
+
 SCHEMA = "homeo-pepper-config"
-VERSION = 2
+VERSION = 3  # 3: anger_threshold on the robot's emotion scale (naoqi_version), speech language and words
 DEFAULT_URL = "tcp://127.0.0.1:9559"
 SCRIPTS_DIR = Path(__file__).resolve().parent / "scripts"
 NAVIGATION = ("ALNavigation", "ALMotion")
@@ -57,14 +59,20 @@ class PepperConfig:
     battery_drive: str  # the drive read from the battery (100 - percent)
     temperature_drive: str  # the drive read from the joints' temperature status (Table 4.6)
     plug: dict | None = None  # {"variable": "object.variable", "plugged": value, "unplugged": value}
-    anger_threshold: float = 0.5
+    anger_threshold: float = 5.0  # anger level above this is a scolding, on the 0..emotion_scale of naoqi_version
     word_confidence: float = 0.4
+    naoqi_version: str = DEFAULT_NAOQI  # which documented formats the robot speaks (e.g. the emotion scale)
+    speech_language: str = "English"  # ALSpeechRecognition.setLanguage ('' = leave the robot's)
     proposals: dict = field(default_factory=dict)
     keywords: dict = field(default_factory=dict)
     gesture_event: str = "PepperBridge/Gesture"
     movement_event: str = "PepperBridge/Movement"
     intention_cues: dict = field(default_factory=dict)
     source: str = "<memory>"
+
+    @property
+    def emotion_scale(self) -> int:
+        return emotion_scale(self.naoqi_version)
 
     def phrase_actions(self) -> dict[str, str]:
         """Every phrase the robot may say -> the action it belongs to (how a user recognises it)."""
@@ -119,7 +127,9 @@ def config_from_dict(raw: Any, source: str = "<memory>", scenario=None) -> Peppe
     if not isinstance(raw, dict) or raw.get("schema") != SCHEMA:
         fail("schema", f"must be {SCHEMA!r}")
     if raw.get("version") != VERSION:
-        fail("version", f"unsupported version {raw.get('version')!r} (this program reads {VERSION})")
+        hint = " (version 2 read voice anger on 0..1; version 3 reads it on NAOqi's 0..10 scale: see docs/PEPPER.md)" \
+            if raw.get("version") == 2 else ""
+        fail("version", f"unsupported version {raw.get('version')!r} (this program reads {VERSION}){hint}")
     places = raw.get("places")
     if not isinstance(places, dict) or not places:
         fail("places", "must map location names to [x, y]")
@@ -157,10 +167,19 @@ def config_from_dict(raw: Any, source: str = "<memory>", scenario=None) -> Peppe
         for phrase in a.say:
             if owner.setdefault(phrase, a.name) != a.name:
                 fail(f"actions.{a.name}.say", f"phrase {phrase!r} belongs to two actions ({owner[phrase]}, {a.name})")
-    for k in ("anger_threshold", "word_confidence"):
-        v = raw.get(k, 0.5)
-        if not _is_number(v) or not 0.0 <= v <= 1.0:
-            fail(k, "must be a number in [0, 1]")
+    version = raw.get("naoqi_version", DEFAULT_NAOQI)
+    try:
+        scale = emotion_scale(version)
+    except ValueError as exc:
+        fail("naoqi_version", str(exc))
+    v = raw.get("anger_threshold", 5.0)
+    if not _is_number(v) or not 0.0 <= v < scale:
+        fail("anger_threshold", f"must be a number in [0, {scale}) (NAOqi {version} reports anger 0..{scale})")
+    if not isinstance(raw.get("speech_language", "English"), str):
+        fail("speech_language", "must be a language name as ALSpeechRecognition.setLanguage takes it (e.g. English)")
+    v = raw.get("word_confidence", 0.4)
+    if not _is_number(v) or not 0.0 <= v <= 1.0:
+        fail("word_confidence", "must be a number in [0, 1]")
     for k in ("proposals", "keywords"):
         m = raw.get(k, {})
         if not isinstance(m, dict) or not all(isinstance(a, str) and isinstance(b, str) for a, b in m.items()):
@@ -179,7 +198,8 @@ def config_from_dict(raw: Any, source: str = "<memory>", scenario=None) -> Peppe
     cfg = PepperConfig(
         places=pl, start_location=start, navigation=nav, actions=actions, battery_drive=body["battery"],
         temperature_drive=body["temperature"], plug=plug,
-        anger_threshold=float(raw.get("anger_threshold", 0.5)), word_confidence=float(raw.get("word_confidence", 0.4)),
+        anger_threshold=float(raw.get("anger_threshold", 5.0)), word_confidence=float(raw.get("word_confidence", 0.4)),
+        naoqi_version=str(version), speech_language=str(raw.get("speech_language", "English")),
         proposals=dict(raw.get("proposals", {})), keywords=dict(raw.get("keywords", {})),
         gesture_event=str(raw.get("gesture_event", "PepperBridge/Gesture")),
         movement_event=str(raw.get("movement_event", "PepperBridge/Movement")),
@@ -276,4 +296,8 @@ class LinkSettings:
     backoff_max: float = 10.0
     backoff_factor: float = 2.0
     poll_period: float = 0.1  # polling of event keys where ALMemory.subscriber is refused
+    call_timeout: float = 3.0  # a read (or subscribe) the robot does not answer in this time fails
+    action_timeout: float = 60.0  # a move, rest or speech call fails after this
+    heartbeat_period: float = 1.0  # how often the robot is asked something when nothing else is going on
+    heartbeat_timeout: float = 2.0  # no answer for this long, connection open: the robot is unresponsive
     battery_source: str = "memory"  # "memory" (0..1 fraction key) or "albattery" (percent)

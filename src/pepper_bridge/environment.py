@@ -164,7 +164,8 @@ class PepperEnvironment:
         seen = self._seen
         wb = seen["world"]["body"]
         self.last_row = {"interaction": self.tick + 1, "cue_intention": seen["cue_intention"], "action": name,
-                         "ok": res["ok"], "reason": res["reason"], "feedback": out["feedback"],
+                         "ok": res["ok"], "reason": res["reason"], "missed": bool(res.get("unavailable")),
+                         "feedback": out["feedback"],
                          "proposal": out["proposal"], "location": seen["world"]["robot"]["location"],
                          "battery_percent": wb.get("battery_percent"),
                          "temperature_status": wb.get("temperature_status"), "observation": seen["observation"]}
@@ -179,7 +180,7 @@ class PepperEnvironment:
         name = self.sc.action_names[action] if action is not None else None
         seen = self._seen or {"world": {"robot": {}, "body": {}}, "cue_intention": None, "observation": {}}
         self.last_row = {"interaction": self.tick + 1, "cue_intention": seen["cue_intention"], "action": name,
-                         "ok": False, "reason": reason, "feedback": 0, "proposal": None,
+                         "ok": False, "reason": reason, "missed": True, "feedback": 0, "proposal": None,
                          "location": seen["world"]["robot"].get("location"),
                          "battery_percent": seen["world"]["body"].get("battery_percent"),
                          "temperature_status": seen["world"]["body"].get("temperature_status"),

@@ -12,7 +12,8 @@ Keys and formats (NAOqi 2.5/2.9 documentation):
 - ``FrontTactilTouched`` / ``MiddleTactilTouched`` / ``RearTactilTouched``: 1.0 on touch,
   0.0 on release.
 - ``ALVoiceEmotionAnalysis/EmotionRecognized``: ``[[matched index, matched level],
-  [calm, anger, joy, sorrow, laughter], excitement]``, levels in 0..1.
+  [calm, anger, joy, sorrow, laughter], excitement]``, levels integers 0..10 (NAOqi 2.5, 2.8)
+  or 0..5 (2.1, 2.4); the documentation's example ``[[4, 3], [0, 2, 1, 3, 0], 1]``.
 - ``WordRecognized``: ``[phrase, confidence, phrase, confidence, ...]`` best first.
 - ``EngagementZones/PeopleInZone1..3`` and ``PeoplePerception/PeopleList``: lists of ids.
 - ``BatteryPowerPluggedChanged``: bool, the robot is on its charging station.
@@ -138,22 +139,74 @@ def touch_feedback(value: Any, source: str = "touch") -> int:
     return 1 if x == 1.0 else 0
 
 
-def anger_level(value: Any, source: str = EMOTION_EVENT) -> float:
-    """The anger level of an EmotionRecognized value."""
-    if not isinstance(value, (list, tuple)) or len(value) < 2:
-        raise Rejected(source, value, "expected [[index, level], [calm, anger, joy, sorrow, laughter], excitement]")
-    levels = value[1]
-    if not isinstance(levels, (list, tuple)) or len(levels) < 2:
-        raise Rejected(source, value, "emotion levels must be a list [calm, anger, ...]")
-    a = _number(source, levels[1])
-    if not 0.0 <= a <= 1.0:
-        raise Rejected(source, value, "anger level outside 0..1")
-    return a
+# Levels of EmotionRecognized are integers on a scale that depends on the NAOqi version
+# (ALVoiceEmotionAnalysis overview, "Emotion levels ... Scores are integers between 0 and N"):
+# http://doc.aldebaran.com/2-1/naoqi/audio/alvoiceemotionanalysis.html and .../2-4/...: 0..5;
+# http://doc.aldebaran.com/2-5/naoqi/audio/alvoiceemotionanalysis.html and .../2-8/...: 0..10.
+# 2.9 has no page of its own: it keeps the 2.8 scale here (docs/PEPPER.md says so).
+EMOTION_SCALES = {"2.1": 5, "2.3": 5, "2.4": 5, "2.5": 10, "2.7": 10, "2.8": 10, "2.9": 10}
+EMOTION_SHAPE = "[[matched index, matched level], [calm, anger, joy, sorrow, laughter], excitement]"
+DEFAULT_NAOQI = "2.5"
 
 
-def emotion_feedback(value: Any, threshold: float, source: str = EMOTION_EVENT) -> int:
-    """-1 when the anger level is above ``threshold``, else 0."""
-    return -1 if anger_level(value, source) > threshold else 0
+def emotion_scale(version: str) -> int:
+    """The top of the emotion levels' scale for a NAOqi version ("2.5", "2.5.5.5", ...)."""
+    key = ".".join(str(version).strip().split(".")[:2])
+    if key not in EMOTION_SCALES:
+        raise ValueError(f"unknown NAOqi version {version!r} (known: {', '.join(EMOTION_SCALES)})")
+    return EMOTION_SCALES[key]
+
+
+def _level(source: str, value: Any, whole: Any, what: str, top: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise Rejected(source, whole, f"{what} must be an integer, got {type(value).__name__}")
+    if not math.isfinite(value) or value != int(value):
+        raise Rejected(source, whole, f"{what} must be an integer 0..{top} (documented scale)")
+    if not 0 <= value <= top:
+        raise Rejected(source, whole, f"{what} {value:g} outside 0..{top} (documented scale)")
+    return int(value)
+
+
+def emotion_levels(value: Any, scale: int = 10, source: str = EMOTION_EVENT) -> dict:
+    """A documented EmotionRecognized value -> {"matched": (index, level), "levels": {emotion: level},
+    "excitement": level}; anything else raises Rejected."""
+    if not isinstance(value, (list, tuple)) or len(value) != 3:
+        raise Rejected(source, value, f"expected {EMOTION_SHAPE}")
+    matched, levels, excitement = value
+    if not isinstance(matched, (list, tuple)) or len(matched) != 2:
+        raise Rejected(source, value, "expected [matched index, matched level] first")
+    index = _level(source, matched[0], value, "matched index", len(EMOTIONS) - 1)  # 0 unknown .. 4 sorrow
+    level = _level(source, matched[1], value, "matched level", scale)
+    if not isinstance(levels, (list, tuple)) or len(levels) != len(EMOTIONS):
+        raise Rejected(source, value, "emotion levels must be [calm, anger, joy, sorrow, laughter]")
+    named = {e: _level(source, v, value, f"{e} level", scale) for e, v in zip(EMOTIONS, levels)}
+    if isinstance(excitement, bool) or not isinstance(excitement, (int, float)) or not math.isfinite(excitement) \
+            or excitement < 0:
+        raise Rejected(source, value, "excitement must be a non-negative number")
+    return {"matched": (index, level), "levels": named, "excitement": excitement}
+
+
+def anger_level(value: Any, scale: int = 10, source: str = EMOTION_EVENT) -> int:
+    """The anger level (``levels[1]``) of a documented EmotionRecognized value."""
+    return emotion_levels(value, scale, source)["levels"]["anger"]
+
+
+def emotion_feedback(value: Any, threshold: float, scale: int = 10, source: str = EMOTION_EVENT) -> int:
+    """-1 when the anger level is above ``threshold`` (on the same 0..scale), else 0."""
+    return -1 if anger_level(value, scale, source) > threshold else 0
+
+
+def voice(scale: int, calm: int = 0, anger: int = 0, joy: int = 0, sorrow: int = 0, laughter: int = 0,
+          excitement: int = 0) -> list:
+    """An EmotionRecognized value in the documented shape (the stand-in's voices); the matched
+    emotion is the highest of calm..sorrow (laughter is never matched; 0 = unknown when all are 0)."""
+    levels = [calm, anger, joy, sorrow, laughter]
+    for v in levels:
+        if not 0 <= v <= scale:
+            raise ValueError(f"level {v} outside 0..{scale}")
+    top = max(levels[:4])
+    index = levels[:4].index(top) + 1 if top > 0 else 0
+    return [[index, top], levels, excitement]
 
 
 def recognized_phrases(value: Any, min_confidence: float, source: str = WORD_EVENT) -> list[str]:

@@ -23,8 +23,10 @@ help at the charger; moving away unplugs it); heat rises ``heat_per_m`` per metr
 status is floor(heat) (0..3), the other joints' floor(heat / 2).
 
 Every call received is recorded (``calls()``), memory keys can be forced to wrong values
-(``inject``), and the robot can disappear and come back on the same URL (``drop`` /
-``restart``).
+(``inject``), the robot can disappear and come back on the same URL (``drop`` /
+``restart``), and it can freeze: stop answering with its connection open (``freeze_for``:
+every NAOqi call and event waits until it thaws; ``HomeoStandin`` still answers).
+:class:`NotNaoqiPort` is a loopback port that accepts connections but does not speak qi.
 """
 
 from __future__ import annotations
@@ -112,12 +114,16 @@ class StandinRobot:
         plug_obj = self.cfg.plug["variable"].partition(".")[0] if self.cfg.plug else None
         self.user = ScriptedUser(self.script, desired, self.cfg.gesture_event, self.cfg.movement_event,
                                  plug_actions=self.cfg.plug_actions(),
-                                 plug_place=(scenario.objects.get(plug_obj) or {}).get("location"))
+                                 plug_place=(scenario.objects.get(plug_obj) or {}).get("location"),
+                                 emotion_scale=self.cfg.emotion_scale,
+                                 spoken={act: phrase for phrase, act in reversed(list(self.cfg.proposals.items()))})
         self.phrases = self.cfg.phrase_actions()
         self._last = clock()
         self.session: qi.Session | None = None
         self.url: str | None = None
         self._stop = threading.Event()
+        self._thawed = threading.Event()  # cleared while frozen
+        self._thawed.set()
         self._timed_thread: threading.Thread | None = None
         self._services = self._make_services()
 
@@ -163,11 +169,25 @@ class StandinRobot:
 
     def close(self) -> None:
         self._stop.set()
+        self._thawed.set()  # release held calls
         self.drop()
 
     # -- recording and injection ----------------------------------------------------
     def record(self, service: str, method: str, *args) -> None:
+        """Every NAOqi method starts here: a frozen robot holds the call until it thaws."""
+        self._thawed.wait()
         self._calls.append((service, method, list(args)))
+
+    def freeze_for(self, seconds: float) -> None:
+        """Stop answering (connection open) for ``seconds`` wall seconds; thaws by itself."""
+        self._thawed.clear()
+        t = threading.Timer(seconds, self._thawed.set)
+        t.daemon = True
+        t.start()
+
+    @property
+    def frozen(self) -> bool:
+        return not self._thawed.is_set()
 
     def calls(self, service: str | None = None, exclude_memory_reads: bool = True) -> list:
         out = list(self._calls)
@@ -241,7 +261,13 @@ class StandinRobot:
         return {j: min(3, h if j in MOTION_JOINTS else h // 2) for j in PEPPER_JOINTS}
 
     def _publish(self) -> None:
-        """Body and presence into memory (injected keys keep their forced values)."""
+        """Body and presence into memory (injected keys keep their forced values).
+
+        Formats (docs/PEPPER.md, "NAOqi as documented"): joint temperature status 0..3
+        (http://doc.aldebaran.com/2-8/family/pepper_technical/pepper_dcm/actuator_sensor_names.html);
+        EngagementZones/PeopleInZone1..3 and PeoplePerception/PeopleList: lists of person ids
+        (http://doc.aldebaran.com/2-8/naoqi/peopleperception/alengagementzones.html); the battery
+        charge as the bridge reads it (a 0..1 fraction; no page in the corpus confirms the range)."""
         d = self.data
         d[BATTERY_KEY] = round(self.battery / 100.0, 6)
         d[PLUGGED_KEY] = self.plugged
@@ -264,6 +290,7 @@ class StandinRobot:
     # -- events ---------------------------------------------------------------------
     def emit(self, emits) -> None:
         """Raise events (set the key, then fire the subscribers' signals) outside the lock."""
+        self._thawed.wait()  # a frozen robot raises nothing
         fire = []
         with self.lock:
             for key, value in emits:
@@ -308,7 +335,7 @@ class StandinRobot:
                 if "presence" in e:
                     self.user.present = e["presence"] == "present"
                     self._publish()
-            self.emit(timed_entry_emits(e, self.cfg.gesture_event, self.cfg.movement_event))
+            self.emit(timed_entry_emits(e, self.cfg.gesture_event, self.cfg.movement_event, self.cfg.emotion_scale))
 
     # -- services -------------------------------------------------------------------
     def _make_services(self) -> dict:
@@ -449,6 +476,26 @@ class StandinRobot:
             def unsubscribe(self, name):
                 robot.record("ALSpeechRecognition", "unsubscribe", name)
 
+        class ALPeoplePerception:  # an extractor (ALExtractor API): subscribe / unsubscribe
+            @qi.bind(qi.Void, [qi.String])
+            def subscribe(self, name):
+                robot.record("ALPeoplePerception", "subscribe", name)
+
+            @qi.bind(qi.Void, [qi.String])
+            def unsubscribe(self, name):
+                robot.record("ALPeoplePerception", "unsubscribe", name)
+
+        class ALEngagementZones:
+            @qi.bind(qi.Void, [qi.String])
+            def subscribe(self, name):
+                robot.record("ALEngagementZones", "subscribe", name)
+
+            @qi.bind(qi.Void, [qi.String])
+            def unsubscribe(self, name):
+                robot.record("ALEngagementZones", "unsubscribe", name)
+
+        # EmotionRecognized values come from user.angry_voice / calm_voice: the documented shape and
+        # scale (http://doc.aldebaran.com/2-5/naoqi/audio/alvoiceemotionanalysis.html: 0..10; 2-4: 0..5)
         class ALVoiceEmotionAnalysis:
             @qi.bind(qi.Void, [qi.String])
             def subscribe(self, name):
@@ -484,6 +531,10 @@ class StandinRobot:
             def dropFor(self, seconds):
                 threading.Timer(0.05, robot.drop_for, args=(seconds,)).start()
 
+            @qi.bind(qi.Void, [qi.Float])
+            def freezeFor(self, seconds):
+                robot.freeze_for(seconds)
+
             @qi.bind(qi.Dynamic, [])
             def state(self):
                 return robot.state()
@@ -494,7 +545,8 @@ class StandinRobot:
 
         return {"ALMemory": ALMemory(), "ALBattery": ALBattery(), "ALMotion": ALMotion(), "ALNavigation": ALNavigation(),
                 "ALTextToSpeech": ALTextToSpeech(), "ALSpeechRecognition": ALSpeechRecognition(),
-                "ALVoiceEmotionAnalysis": ALVoiceEmotionAnalysis(), "HomeoStandin": HomeoStandin()}
+                "ALVoiceEmotionAnalysis": ALVoiceEmotionAnalysis(), "ALPeoplePerception": ALPeoplePerception(),
+                "ALEngagementZones": ALEngagementZones(), "HomeoStandin": HomeoStandin()}
 
     def _motion(self, x: float, y: float) -> bool:
         with self.lock:
@@ -506,6 +558,54 @@ class StandinRobot:
             emits = self._user_saw(self.cfg.move_action(loc))
         self.emit(emits)
         return True
+
+
+class NotNaoqiPort:
+    """A loopback TCP port that accepts connections but is not NAOqi: ``mode`` "silent" says
+    nothing, "http" answers like a web server. ``url`` is ``tcp://127.0.0.1:PORT``."""
+
+    def __init__(self, mode: str = "silent"):
+        import socket
+
+        self.mode = mode
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        self.sock.bind(("127.0.0.1", 0))
+        self.sock.listen(8)
+        self.sock.settimeout(0.2)
+        self.url = f"tcp://127.0.0.1:{self.sock.getsockname()[1]}"
+        self._conns: list = []
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._serve, daemon=True, name="not-naoqi")
+        self._thread.start()
+
+    def _serve(self) -> None:
+        import socket
+
+        while not self._stop.is_set():
+            try:
+                conn, _ = self.sock.accept()
+            except (socket.timeout, OSError):
+                continue
+            self._conns.append(conn)
+            if self.mode == "http":
+                try:
+                    conn.sendall(b"HTTP/1.0 200 OK\r\nContent-Type: text/plain\r\n\r\nnot a robot\n")
+                except OSError:
+                    pass
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=2.0)
+        for c in self._conns:
+            c.close()
+        self.sock.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
 
 
 def _loopback_only(url: str) -> str:

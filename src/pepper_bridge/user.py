@@ -11,13 +11,14 @@ A user file (``scripts/*.json``, schema ``homeo-pepper-user``)::
         {"intention": "music", "words": ["music"], "patience": 2, "proposal": "Play"},
         {"presence": "absent"}
      ],
-     "timed": [{"at": 1.5, "touch": "FrontTactilTouched"}, {"at": 2.0, "anger": 0.9},
+     "timed": [{"at": 1.5, "touch": "FrontTactilTouched"}, {"at": 2.0, "anger": 8}, {"at": 2.2, "calm": 6},
                {"at": 2.5, "words": [["Play", 0.8]]}, {"at": 3.0, "presence": "far"}]}
 
 Interactions are reactive, one per robot action: the user expresses the intention (a gesture
 event, a movement event, one ``WordRecognized`` per word), watches what the robot does, and
 answers: a head touch when the robot did a desired action and ``praise`` (default true); an
-angry voice (``EmotionRecognized`` with anger ``anger``, default 0.9) otherwise when ``scold``
+angry voice (``EmotionRecognized`` in the documented shape, anger level ``anger`` on the robot's
+scale: default 8 of 10, e.g. ``[[2, 8], [1, 8, 0, 0, 0], 7]``) otherwise when ``scold``
 (default true), with the proposal spoken (``WordRecognized``) when ``propose`` (default
 true). A missed intention is expressed again, up to ``patience`` attempts (default 1). An
 interaction with ``"intention": null`` expresses nothing and answers nothing. ``presence``
@@ -35,7 +36,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from .mapping import EMOTION_EVENT, TOUCH_EVENTS, WORD_EVENT
+from .mapping import EMOTION_EVENT, TOUCH_EVENTS, WORD_EVENT, voice
 
 SCHEMA = "homeo-pepper-user"
 VERSION = 1
@@ -59,6 +60,8 @@ class ScriptedUser:
     movement_event: str = "PepperBridge/Movement"
     plug_actions: Mapping[str, bool] = field(default_factory=dict)  # action -> True: plug in, False: unplug
     plug_place: str | None = None  # where the plug is (None: anywhere)
+    emotion_scale: int = 10  # the robot's emotion levels are integers 0..emotion_scale (NAOqi 2.5+: 10)
+    spoken: Mapping[str, str] = field(default_factory=dict)  # action -> the phrase a person says for it
     index: int = 0
     attempts: int = 0
     present: bool = True
@@ -124,12 +127,11 @@ class ScriptedUser:
         else:
             row["satisfied"] = False
             if it.get("scold", True):
-                anger = float(it.get("anger", 0.9))
-                emits.append((EMOTION_EVENT, [[2, anger], [round(1 - anger, 3), anger, 0.0, 0.0, 0.0], 0.5]))
+                emits.append((EMOTION_EVENT, angry_voice(it.get("anger"), self.emotion_scale)))
                 row["feedback"] = -1
                 if it.get("propose", True):
                     prop = it.get("proposal") or self.desired[intention][0]
-                    emits.append((WORD_EVENT, [prop, 0.9]))
+                    emits.append((WORD_EVENT, [self.spoken.get(prop, prop), 0.9]))  # words, not action ids
                     row["proposal"] = prop
             self.attempts += 1
             if self.attempts >= int(it.get("patience", 1)):
@@ -143,14 +145,27 @@ class ScriptedUser:
         self.attempts = 0
 
 
-def timed_entry_emits(entry: Mapping[str, Any], gesture_event: str, movement_event: str) -> list:
+def angry_voice(anger: Any, scale: int) -> list:
+    """A scolding as ALVoiceEmotionAnalysis reports it: on 0..10, anger 8 -> [[2, 8], [1, 8, 0, 0, 0], 7]."""
+    a = int(round(0.8 * scale)) if anger is None else int(anger)
+    return voice(scale, calm=min(1, scale - a) if a < scale else 0, anger=a, excitement=min(scale, 7))
+
+
+def calm_voice(calm: Any, scale: int) -> list:
+    """A calm answer: on 0..10, calm 6 -> [[1, 6], [6, 1, 0, 0, 0], 1]."""
+    c = int(calm)
+    return voice(scale, calm=c, anger=min(1, scale - c) if c < scale else 0, excitement=1)
+
+
+def timed_entry_emits(entry: Mapping[str, Any], gesture_event: str, movement_event: str, emotion_scale: int = 10) -> list:
     """The events one timed entry raises (presence is handled by the stand-in)."""
     out = []
     if "touch" in entry:
         out += [(entry["touch"], 1.0), (entry["touch"], 0.0)]
     if "anger" in entry:
-        a = float(entry["anger"])
-        out.append((EMOTION_EVENT, [[2, a], [round(1 - a, 3), a, 0.0, 0.0, 0.0], 0.5]))
+        out.append((EMOTION_EVENT, angry_voice(entry["anger"], emotion_scale)))
+    if "calm" in entry:
+        out.append((EMOTION_EVENT, calm_voice(entry["calm"], emotion_scale)))
     if "words" in entry:
         flat = []
         for w in entry["words"]:

@@ -59,7 +59,8 @@ class PepperWorldSide:
     def status(self, done: bool) -> dict:
         link = self.env.bridge.status()
         return {"extra": {"log": list(self.log), "interactions_done": self.env.tick,
-                          "robot": {k: link.get(k) for k in ("state", "connected", "reason", "url", "connects", "drops")}}}
+                          "robot": {k: link.get(k) for k in ("state", "connected", "reason", "url", "connects", "drops", "freezes")},
+                          "robot_missed": sum(1 for r in self.log if r.get("missed"))}}
 
     # -- helpers ---------------------------------------------------------------------------
     def _row(self, action_fields: dict | None) -> None:
