@@ -112,3 +112,21 @@ def test_the_recognition_host_rejects_unknown_symbols_and_hides_the_truth(thesis
     assert a == b and a[0][1]["mode"] == BAYES
     with pytest.raises(ValueError, match="needs the intention"):
         RecognitionHost(thesis, ORACLE).check(cues)
+
+
+def test_the_driver_counts_a_tick_the_world_could_not_act_on_as_missed(thesis):
+    """A world side that reports its last step as missed (a robot that was away) adds to the run's
+    missed ticks, as a timeout does."""
+    bus = Bus(vocabulary(thesis), 0)
+    side = SimWorldSide(thesis, 0)
+    driver = LockstepDriver(side, bus.send, iterations=3)
+    noted = []
+    driver.note = noted.append
+    driver.begin()
+    for k, missed in ((0, True), (1, False)):
+        side.last_missed = missed
+        obs = [m for key, m in bus.drain() if key == "world"]
+        assert obs and obs[-1].tick == k
+        from homeo_msgs_py.schemas import Message
+        driver.on_action(Message("homeo/action", 0, k, 1.0, {"action": "Chat", "drives": {n: 0.0 for n in thesis.drive_names}}))
+    assert driver.tick == 2 and driver.missed == 1 and noted == ["missed ticks"]

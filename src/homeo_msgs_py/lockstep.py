@@ -77,6 +77,8 @@ class WorldSide(Protocol):
         """Perform the tick's action (``homeo/action`` fields; None: no action came); the
         ``homeo/outcome`` fields; may block."""
 
+    last_missed: bool  # whether the last step could not be performed at all (a robot that was away)
+
     def step_failed(self, action_fields: dict | None, reason: str) -> dict:
         """The outcome fields when ``step`` raised: nothing was done."""
 
@@ -172,6 +174,9 @@ class LockstepDriver:
             self.send("world", self.tick, world, self.run)
         elif kind == "step":
             fields = res if err is None else self.side.step_failed(args[0], str(err))
+            if getattr(self.side, "last_missed", False):  # the world could not act at all: a missed tick
+                self.missed += 1
+                self.note("missed ticks")
             self.send("outcome", self.tick, fields, self.run)
             self.tick += 1
             if self.iterations and self.tick >= self.iterations:

@@ -19,6 +19,7 @@ from .metrics import MetricRecorder, accuracy_ends
 
 
 class SimWorldSide:
+    last_missed = False  # the simulation always acts
     def __init__(self, sc: Scenario, seed: int = 0, intention_accuracy: bool = False, trace=None):
         self.sc = sc
         self.intention_accuracy = intention_accuracy  # score the intention each action was chosen for

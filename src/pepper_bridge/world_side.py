@@ -22,6 +22,7 @@ class PepperWorldSide:
         self.end_with_script = end_with_script
         self.log: list = []
         self.user_done = False  # the stand-in's scripted user has no more interactions
+        self.last_missed = False  # the last step found the robot away: the driver counts a missed tick
         self._standin = None
 
     def reset(self) -> None:
@@ -43,6 +44,7 @@ class PepperWorldSide:
         name = action_fields.get("action") if action_fields is not None else None
         out = self.env.step(self.sc.action_index(name) if name is not None else None)
         self._row(action_fields)
+        self.last_missed = bool(self.env.last_row.get("missed"))
         if self.end_with_script:
             self.user_done = self._standin_user_done()
         return codec.outcome_fields(self.sc, out)
@@ -51,6 +53,7 @@ class PepperWorldSide:
         name = action_fields.get("action") if action_fields is not None else None
         out = self.env.failed(self.sc.action_index(name) if name is not None else None, reason)
         self._row(action_fields)
+        self.last_missed = True
         return codec.outcome_fields(self.sc, out)
 
     def record(self, action_fields: dict | None) -> None:
