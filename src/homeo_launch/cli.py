@@ -40,6 +40,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--log-dir", metavar="DIR", help="keep each node's log here (default: a temporary directory)")
     s.add_argument("--json", action="store_true", help="print the metrics as homeo-sim run --json does")
     s.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_live_options(s)
     from .pepper import add_parser as add_pepper
 
     add_pepper(sub)
@@ -48,6 +49,26 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--rounds", type=int_at_least(1), default=3, help="alternating graph/floor pairs (default 3)")
     b.add_argument("--json", action="store_true")
     return ap
+
+
+def add_live_options(p) -> None:
+    """--record and --foxglove, shared by sim and pepper."""
+    p.add_argument("--record", metavar="DIR", help="record every topic as a rosbag2 bag (MCAP) in this new folder")
+    p.add_argument("--foxglove", metavar="[HOST:]PORT", type=host_port, default=None,
+                   help="serve the run live to the Foxglove app over WebSocket (host 127.0.0.1 unless given)")
+
+
+def host_port(text: str) -> tuple[str, int]:
+    """``PORT`` or ``HOST:PORT``; the host defaults to loopback (nothing leaves the machine unasked)."""
+    host, _, port = text.rpartition(":")
+    host = host.strip("[]") or "127.0.0.1"
+    try:
+        n = int(port)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not [HOST:]PORT") from None
+    if not 0 <= n <= 65535:
+        raise argparse.ArgumentTypeError(f"port {n} is outside 0..65535")
+    return host, n
 
 
 def _sigterm_as_interrupt(signum, frame):

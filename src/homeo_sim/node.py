@@ -6,7 +6,7 @@ Subscribes homeo/action (tick k's action, with the robot's drives that the metri
 Services   ~/reset (std_srvs/Trigger): a new run from tick 0 (the robot keeps its Q-table)
 Parameters seed (int), iterations (int, 0 = until stopped), rate (Hz, 0 = as fast as lockstep
            allows), action_timeout (s), trace_path (JSON lines per tick, '' = none),
-           wait_for_readers (bool), intention_accuracy, scenario, overrides
+           wait_for_readers (bool), extra_readers (int), intention_accuracy, scenario, overrides
 
 The tick itself is ``homeo_msgs_py.lockstep.LockstepDriver`` over ``world_side.SimWorldSide``;
 this node declares parameters, waits for its readers and writers (``homeo_msgs_py.graph``) and
@@ -50,6 +50,10 @@ class SimNode(ScenarioNode):
         self.declare_parameter("trace_path", "", d(description="write one JSON line per tick here ('' = no trace)"))
         self.declare_parameter("wait_for_readers", True, d(description="start only when the graph's readers and "
                                                            "writers have matched"))
+        self.declare_parameter("extra_readers", 0, d(
+            description="readers beyond the graph's to wait for on every topic before tick 0 (a recorder, a live "
+                        "view): so that they miss nothing of the run", read_only=True,
+            integer_range=[IntegerRange(from_value=0, to_value=100, step=1)]))
         self.declare_parameter("intention_accuracy", False, d(
             description="score the recognised intention of each action against the human's (bayes mode); the "
                         "intention node then learns from the outcome, so the gate waits for its reader too",
@@ -101,8 +105,9 @@ class SimNode(ScenarioNode):
         if not self.get_parameter("wait_for_readers").value:
             return []
         out = []
+        extra = self.get_parameter("extra_readers").value
         for key, pub in self.pubs.items():
-            want = readers("sim", key, self.learning)
+            want = readers("sim", key, self.learning) + extra
             if pub.matched() < want:
                 out.append(f"{pub.topic} has {pub.matched()}/{want} readers")
         for i in DESC.inputs:
