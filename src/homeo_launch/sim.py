@@ -88,6 +88,8 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
             from .tap import Tap
 
             tap = Tap(mon.node, sinks)
+            mon.activity = lambda: tap.count
+            start_robot_first(graph, mon, tap, discovery_timeout)
         graph.start()
         wait_until_up(graph, mon, GRAPHS["sim"], endpoints("sim", o.intention == BAYES), discovery_timeout)
         t_start = None
@@ -130,6 +132,24 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
         if not quiet and any(c not in (0, None, -2, 130) for c in codes.values()):
             bad = ", ".join(f"{n}={c}" for n, c in codes.items() if c not in (0, None, -2, 130))
             print(f"{PROG}: note: nodes stopped with exit codes {bad}", file=sys.stderr)
+
+
+def start_robot_first(graph: Graph, mon: Monitor, tap, bound: float) -> None:
+    """With a tap: start the robot nodes, wait until the tap hears each of their topics, then the
+    world node (started by the caller), which waits for the tap on its own topics (``extra_readers``)
+    before tick 0. So the tap misses no tick of any topic."""
+    robot = [s.name for s in graph.specs if NODES[s.name].role != "world"]
+    graph.start(robot)
+    keys = {k for n in robot for k in NODES[n].publishes}
+    end = time.monotonic() + bound
+    while True:
+        check_alive(graph)
+        missing = tap.unmatched(keys)
+        if not missing:
+            return
+        if time.monotonic() > end:
+            raise GraphError(f"the recorder did not hear {', '.join(missing)} within {bound:g} s")
+        mon.spin(0.1)
 
 
 def drain(mon: Monitor, tap, bound: float = 2.0) -> None:

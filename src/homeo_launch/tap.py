@@ -61,7 +61,7 @@ class Tap:
 
     def __init__(self, node, sinks, topics: list[Tapped] | None = None):
         from diagnostic_msgs.msg import DiagnosticArray
-        from rclpy.qos import QoSProfile
+        from rclpy.qos import HistoryPolicy, QoSProfile
         from std_msgs.msg import String
 
         from homeo_msgs_py.qos import quiet_sub_events, sub_qos
@@ -72,7 +72,10 @@ class Tap:
         self.done = False
         self.subs = []
         for t in self.topics:
+            # the graph's QoS (what matching depends on), but keep all: a latched state topic's
+            # readers keep a few, and the tap must not lose a tick when it lags behind a burst
             qos = sub_qos(t.key) if t.key in TOPICS else QoSProfile(depth=50)
+            qos = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=qos.reliability, durability=qos.durability)
             mtype = DiagnosticArray if t.msgtype == DIAGNOSTIC_ARRAY else String
             self.subs.append(node.create_subscription(mtype, t.name, self._callback(t), qos, raw=True,
                                                       event_callbacks=quiet_sub_events()))
@@ -93,3 +96,7 @@ class Tap:
                     pass
 
         return cb
+
+    def unmatched(self, keys) -> list[str]:
+        """Topics among ``keys`` whose tap subscription has no writer yet."""
+        return [t.name for s, t in zip(self.subs, self.topics) if t.key in keys and s.get_publisher_count() < 1]
