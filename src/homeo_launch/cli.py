@@ -37,6 +37,11 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--trace", metavar="FILE", help="the simulation writes one JSON line per tick")
     s.add_argument("--action-timeout", type=float_in(0.01, 3600.0), default=5.0,
                    help="seconds to wait for an action before the tick counts as none (default 5)")
+    s.add_argument("--human", choices=("sim", "person"), default="sim",
+                   help="who plays the human: the simulated one (default) or a person sending JSON on "
+                        "/homeo/human_input (see the README)")
+    s.add_argument("--human-timeout", type=float_in(0.01, 3600.0), default=10.0,
+                   help="seconds a tick waits for the person before it counts as no intention (default 10)")
     s.add_argument("--log-dir", metavar="DIR", help="keep each node's log here (default: a temporary directory)")
     s.add_argument("--json", action="store_true", help="print the metrics as homeo-sim run --json does")
     s.add_argument("--quiet", action="store_true", help="no progress bar")

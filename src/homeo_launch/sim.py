@@ -46,6 +46,8 @@ class SimOptions:
     trace: str | None = None
     action_timeout: float = 5.0
     intention: str = BAYES  # the graph recognises intentions; ORACLE is the thesis's simulation
+    human: str = "sim"  # or "person": a person on homeo/human_input plays the human
+    human_timeout: float = 10.0  # seconds a tick waits for the person
     extra_readers: int = 0  # the launcher's tap (a recorder, a live view): the run waits for it
 
 
@@ -64,7 +66,8 @@ def sim_specs(o: SimOptions) -> list[NodeSpec]:
         decision["load_on_start"] = True
     sim = dict(common, seed=o.seed, iterations=o.iterations, rate=float(o.rate),
                action_timeout=float(o.action_timeout), trace_path=os.path.abspath(o.trace) if o.trace else "",
-               intention_accuracy=o.intention == BAYES, extra_readers=o.extra_readers)
+               intention_accuracy=o.intention == BAYES, extra_readers=o.extra_readers, human=o.human,
+               human_timeout=float(o.human_timeout))
     params = {"homeo_sim": sim, "homeo_intention": dict(common, mode=o.intention), "homeo_drives": dict(common),
               "homeo_decision": decision}
     return [NodeSpec(n, NODES[n].module, params[n]) for n in GRAPHS["sim"]]
@@ -200,7 +203,7 @@ def options_from_args(a) -> SimOptions:
     return SimOptions(iterations=a.iterations, rate=a.rate, seed=a.seed, dod=a.dod, xi=a.xi,
                       pseudo_update=False if a.no_pseudo else None, scenario=a.scenario, overrides=tuple(a.set),
                       load_q=a.load_q, save_q=a.save_q, trace=a.trace, action_timeout=a.action_timeout,
-                      intention=a.intention)
+                      intention=a.intention, human=a.human, human_timeout=a.human_timeout)
 
 
 def open_sinks(a, graph: str, iterations: int, seed: int, sc, overrides, **extra) -> list:
