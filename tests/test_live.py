@@ -117,3 +117,62 @@ def test_the_layout_in_docs_is_current_and_plots_what_the_schemas_offer(thesis):
             assert head in props, p["value"]
             if len(path) == 2 and "properties" in props[head] and head != "metrics":
                 assert path[1] in props[head]["properties"], p["value"]
+
+
+@pytest.mark.ros
+def test_foxglove_publish_plays_the_human_and_the_bag_keeps_it(tmp_path):
+    """A client publishes a wish on /homeo/human_input (Foxglove's Publish panel does this): the run,
+    which waits for the person's first word, starts, and the bag records the input and its effect."""
+    from rosgraph import fresh_domain
+
+    from homeo_launch.bag import load_run
+    from homeo_launch.processes import graph_env
+
+    port, bag = _free_port(), tmp_path / "bag"
+    proc = subprocess.Popen([sys.executable, "-m", "homeo_launch.cli", "sim", "--human", "person", "--intention", "oracle",
+                             "--iterations", "2", "--human-timeout", "1", "--quiet", "--json", "--record", str(bag),
+                             "--foxglove", str(port)], env=graph_env(fresh_domain()),
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+
+    async def speak():
+        import websockets
+
+        end = time.monotonic() + 90
+        while True:
+            try:
+                ws = await websockets.connect(f"ws://127.0.0.1:{port}", subprotocols=["foxglove.sdk.v1"])
+                break
+            except OSError:
+                assert time.monotonic() < end
+                await asyncio.sleep(0.3)
+        async with ws:
+            info = json.loads(await asyncio.wait_for(ws.recv(), 10))
+            assert "clientPublish" in info["capabilities"]
+            await ws.send(json.dumps({"op": "advertise", "channels": [
+                {"id": 5, "topic": "/homeo/human_input", "encoding": "json", "schemaName": "homeo/human_input"}]}))
+            # as a person would: speak once the run status says the world waits for the first word
+            while True:
+                msg = await asyncio.wait_for(ws.recv(), max(0.1, end - time.monotonic()))
+                if isinstance(msg, str):
+                    op = json.loads(msg)
+                    for ch in op.get("channels", []) if op["op"] == "advertise" else []:
+                        if ch["topic"] == "/homeo/run_status":
+                            await ws.send(json.dumps({"op": "subscribe", "subscriptions": [{"id": 1, "channelId": ch["id"]}]}))
+                elif msg[0] == 1 and json.loads(msg[13:])["state"] == "starting":
+                    break
+            await asyncio.sleep(1.0)  # the launcher's publisher and the simulation's reader match both ways
+            await ws.send(b"\x01" + struct.pack("<I", 5) + json.dumps({"intention": "light"}).encode())
+            await asyncio.sleep(1.0)
+
+    try:
+        asyncio.run(speak())
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert proc.returncode == 0, err
+    run = load_run(bag)
+    outs = run.by_tick("outcome")
+    assert outs[0]["truth"]["intention"] == "light"  # the client's wish was tick 0's
+    assert outs[1]["truth"]["intention"] == "none"  # then silence

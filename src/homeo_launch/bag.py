@@ -95,7 +95,7 @@ def load_run(path: str | Path) -> RecordedRun:
         with Reader(path) as reader:
             for conn, _t, raw in reader.messages():
                 key = key_of(conn.topic)
-                if key is None:
+                if key is None or key == "human_input":  # a person's inputs: kept in the bag, not replayed
                     run.diagnostics += conn.topic == "/diagnostics"
                     continue
                 if conn.msgtype != STRING:

@@ -52,6 +52,8 @@ def build_parser() -> argparse.ArgumentParser:
     b = sub.add_parser("bench", help="seconds per tick of the graph against a raw rclpy chain (the floor)")
     b.add_argument("--iterations", type=int_at_least(10), default=1000, help="ticks of each (default 1000)")
     b.add_argument("--rounds", type=int_at_least(1), default=3, help="alternating graph/floor pairs (default 3)")
+    b.add_argument("--record", action="store_true",
+                   help="also time the graph recording a bag, and print the ratio with / without recording")
     b.add_argument("--json", action="store_true")
     return ap
 

@@ -36,6 +36,12 @@ class _Listener:
     def on_client_unadvertise(self, client, client_channel_id: int) -> None:
         self.channels.pop((client.id, client_channel_id), None)
 
+    def on_subscribe(self, client, channel) -> None:
+        pass
+
+    def on_unsubscribe(self, client, channel) -> None:
+        pass
+
     def on_message_data(self, client, client_channel_id: int, data: bytes) -> None:
         topic = self.channels.get((client.id, client_channel_id))
         if topic is not None:
@@ -46,7 +52,7 @@ class _Listener:
 
 
 class FoxgloveSink:
-    def __init__(self, where: tuple[str, int], sc, topics: list[Tapped] | None = None, accept: dict | None = None):
+    def __init__(self, where: tuple[str, int], sc, topics: list[Tapped] | None = None, person: bool = False):
         import foxglove
         from foxglove import Channel, Context, Schema
         from foxglove.websocket import Capability
@@ -70,17 +76,31 @@ class FoxgloveSink:
                 name = TOPICS[t.key].schema if t.key in TOPICS else f"homeo/{t.key}"
                 schema = Schema(name=name, encoding="jsonschema", data=json.dumps(json_schema(name, voc)).encode())
                 self.channels[t.name] = (Channel(t.name, schema=schema, message_encoding="json", context=self.ctx), True)
-        self.listener = _Listener(accept or {})
-        caps = [Capability.ClientPublish] if accept else []
+        self.listener = _Listener({})  # filled in by attach: the launcher's node publishes what a client sends
+        self.person = person
+        caps = [Capability.ClientPublish] if person else []
         try:
             self.server = foxglove.start_server(name=SERVER_NAME, host=host, port=port, context=self.ctx,
-                                                capabilities=caps, supported_encodings=["json"] if accept else None,
+                                                capabilities=caps, supported_encodings=["json"] if person else None,
                                                 server_listener=self.listener)
         except Exception as exc:  # noqa: BLE001 - the SDK raises its own error types for a bind failure
             from homeo_msgs_py.cli_args import UserError
 
             raise UserError(f"--foxglove {host}:{port}: cannot serve there ({exc})") from None
         self.port = self.server.port
+
+    def attach(self, node) -> None:
+        """With a person as the human: what a client (Foxglove's Publish panel) sends on
+        /homeo/human_input is published there by ``node``; the simulation decodes it as any input."""
+        if not self.person:
+            return
+        from std_msgs.msg import String
+
+        from homeo_msgs_py.qos import pub_qos
+
+        name = "/" + TOPICS["human_input"].name
+        pub = node.create_publisher(String, name, pub_qos("human_input"))
+        self.listener.accept[name] = lambda text: pub.publish(String(data=text))  # rcl publish is thread-safe
 
     def write(self, t: Tapped, stamp_ns: int, raw: bytes) -> None:
         entry = self.channels.get(t.name)

@@ -92,6 +92,9 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
 
             tap = Tap(mon.node, sinks)
             mon.activity = lambda: tap.count
+            for s in sinks:
+                if hasattr(s, "attach"):
+                    s.attach(mon.node)
             start_robot_first(graph, mon, tap, discovery_timeout)
         graph.start()
         wait_until_up(graph, mon, GRAPHS["sim"], endpoints("sim", o.intention == BAYES), discovery_timeout)
@@ -219,7 +222,7 @@ def open_sinks(a, graph: str, iterations: int, seed: int, sc, overrides, **extra
         if getattr(a, "foxglove", None):
             from .live import FoxgloveSink
 
-            sinks.append(FoxgloveSink(a.foxglove, sc))
+            sinks.append(FoxgloveSink(a.foxglove, sc, person=getattr(a, "human", "sim") == "person"))
             if not getattr(a, "quiet", False):
                 print(f"{PROG}: Foxglove: open ws://{a.foxglove[0]}:{sinks[-1].port}", file=sys.stderr)
     except BaseException:
