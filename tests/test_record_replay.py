@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+import time
 from collections import defaultdict
 from pathlib import Path
 
@@ -50,6 +51,7 @@ def _independent_read(bag: Path):
     with open(mcap_file, "rb") as f:
         for schema, channel, message, decoded in make_reader(f, decoder_factories=[DecoderFactory()]).iter_decoded_messages():
             out[channel.topic].append((schema.name, channel.message_encoding, decoded))
+            out["log_times"].append(message.log_time)
     return out
 
 
@@ -70,7 +72,10 @@ def test_the_bag_holds_every_topic_one_message_per_tick_as_cdr_std_msgs_string(r
 
     got = _independent_read(bag)
     counts = {t["topic_metadata"]["name"]: t["message_count"] for t in meta["topics_with_message_count"]}
+    stamps = got.pop("log_times")
     assert {t: len(v) for t, v in got.items()} == {t: n for t, n in counts.items() if n}
+    t0 = meta["starting_time"]["nanoseconds_since_epoch"]
+    assert min(stamps) == t0 and max(stamps) - t0 < 120e9 and abs(t0 / 1e9 - time.time()) < 600  # arrival times
     assert counts["/homeo/human_input"] == 0  # the simulated human does not write it
     voc = codec.vocabulary(load_scenario())
     ticks = {}

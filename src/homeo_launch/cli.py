@@ -11,6 +11,7 @@ from homeo_decision.scenario import ScenarioError
 from homeo_msgs_py.cli_args import Parser, UserError, float_in, int_at_least, setting
 from homeo_msgs_py.graph import BAYES, INTENTION_MODES
 
+from .live_args import add_live_options
 from .monitor import GraphError
 from .sim import PROG, cmd_sim
 
@@ -56,26 +57,6 @@ def build_parser() -> argparse.ArgumentParser:
                    help="also time the graph recording a bag, and print the ratio with / without recording")
     b.add_argument("--json", action="store_true")
     return ap
-
-
-def add_live_options(p) -> None:
-    """--record and --foxglove, shared by sim and pepper."""
-    p.add_argument("--record", metavar="DIR", help="record every topic as a rosbag2 bag (MCAP) in this new folder")
-    p.add_argument("--foxglove", metavar="[HOST:]PORT", type=host_port, default=None,
-                   help="serve the run live to the Foxglove app over WebSocket (host 127.0.0.1 unless given)")
-
-
-def host_port(text: str) -> tuple[str, int]:
-    """``PORT`` or ``HOST:PORT``; the host defaults to loopback (nothing leaves the machine unasked)."""
-    host, _, port = text.rpartition(":")
-    host = host.strip("[]") or "127.0.0.1"
-    try:
-        n = int(port)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not [HOST:]PORT") from None
-    if not 0 <= n <= 65535:
-        raise argparse.ArgumentTypeError(f"port {n} is outside 0..65535")
-    return host, n
 
 
 def _sigterm_as_interrupt(signum, frame):

@@ -34,7 +34,6 @@ class Monitor:
         # one executor for the node's life: rclpy.spin_once(node) adds and removes the node every call
         self.executor = SingleThreadedExecutor()
         self.executor.add_node(self.node)
-        self.activity = lambda: 0  # a tap's message count: spin takes in what is ready while it grows
         self.status = None
         voc = Vocabulary()
 
@@ -46,18 +45,8 @@ class Monitor:
 
         self.node.create_subscription(String, TOPICS["run_status"].name, on_status, sub_qos("run_status"))
 
-    def spin(self, timeout: float = 0.05, burst: int = 64) -> None:
-        """Wait up to ``timeout`` for one callback; then, while a tap keeps receiving, take in up to
-        ``burst`` more without waiting (a recorder must keep pace with the graph)."""
-        ex = self.executor
-        ex.spin_once(timeout_sec=timeout)
-        n = self.activity()
-        for _ in range(burst):
-            ex.spin_once(timeout_sec=0.0)
-            m = self.activity()
-            if m == n:
-                return
-            n = m
+    def spin(self, timeout: float = 0.05) -> None:
+        self.executor.spin_once(timeout_sec=timeout)
 
     def missing(self, nodes, endpoints) -> list[str]:
         present = set(self.node.get_node_names())

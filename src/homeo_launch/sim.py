@@ -91,7 +91,6 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
             from .tap import Tap
 
             tap = Tap(mon.node, sinks)
-            mon.activity = lambda: tap.count
             for s in sinks:
                 if hasattr(s, "attach"):
                     s.attach(mon.node)
@@ -131,6 +130,8 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
                 raise GraphError(f"saving the Q-table failed: {msg}")
         return out
     finally:
+        if tap is not None:
+            tap.close()
         if mon is not None:
             mon.close()
         codes = graph.stop()
@@ -164,7 +165,7 @@ def drain(mon: Monitor, tap, bound: float = 2.0) -> None:
     end = time.monotonic() + bound
     while time.monotonic() < end:
         n = tap.count
-        mon.spin(0.05)
+        mon.spin(0.05)  # the tap spins in its own thread; this only lets time pass
         if tap.done and tap.count == n:
             return
 
