@@ -66,7 +66,7 @@ class Tap:
     on each wake, takes every message that is there."""
 
     WAKE_S = 0.1  # the loop looks at ``close`` at least this often
-    GATHER_S = 0.002
+    GATHER_S = 0.005
 
     def __init__(self, context_node, sinks, topics: list[Tapped] | None = None):
         import threading
