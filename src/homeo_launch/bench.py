@@ -50,15 +50,37 @@ def floor_s_per_tick(iterations: int, hops: int = HOPS, bound_s: float = 120.0) 
         graph.close()
 
 
+def recorded_s_per_tick(iterations: int) -> float:
+    """The graph recording every topic into a bag (``--record``), in a temporary folder."""
+    import tempfile
+    from pathlib import Path
+
+    from homeo_decision.scenario import load_scenario
+
+    from .record import BagSink, run_info
+    from .tap import tapped_topics
+
+    with tempfile.TemporaryDirectory(prefix="homeo-bench-bag-") as tmp:
+        sink = BagSink(Path(tmp) / "bag", run_info("sim", iterations, 0, load_scenario(), {}), tapped_topics())
+        try:
+            st = run_graph(SimOptions(iterations=iterations), quiet=True, sinks=[sink])
+        finally:
+            sink.close()
+        return st["elapsed_s"] / iterations
+
+
 def cmd_bench(args) -> int:
     """Alternate graph and floors ``rounds`` times; report the medians (this machine is shared
     and noisy: a single pair can be off by a factor of two either way)."""
     import statistics
 
     graph, oracle, floor, crit, rss, missed = [], [], [], [], [], 0
+    recorded = []
     for r in range(args.rounds):
         st = run_graph(SimOptions(iterations=args.iterations), quiet=True)
         graph.append(st["elapsed_s"] / args.iterations)
+        if getattr(args, "record", False):
+            recorded.append(recorded_s_per_tick(args.iterations))
         oracle.append(run_graph(SimOptions(iterations=args.iterations, intention=ORACLE),
                                 quiet=True)["elapsed_s"] / args.iterations)
         rss.append(st["rss_mb"])
@@ -70,7 +92,12 @@ def cmd_bench(args) -> int:
                   f"({HOPS} hops), {crit[-1] * 1e3:.3f} ms/tick ({CRITICAL_HOPS} hops)", file=sys.stderr)
     g, f, c = statistics.median(graph), statistics.median(floor), statistics.median(crit)
     o = statistics.median(oracle)
-    out = {"graph_s_per_tick": g, "floor_s_per_tick": f, "ratio": g / f, "rss_mb": max(rss),
+    rec = {}
+    if recorded:
+        m = statistics.median(recorded)
+        rec = {"recorded_s_per_tick": m, "record_ratio": m / g,
+               "record_ratio_per_round": [a / b for a, b in zip(recorded, graph)]}
+    out = {**rec, "graph_s_per_tick": g, "floor_s_per_tick": f, "ratio": g / f, "rss_mb": max(rss),
            "hops": HOPS, "rounds": args.rounds, "ratio_per_round": [a / b for a, b in zip(graph, floor)],
            "critical_path_floor_s_per_tick": c, "critical_path_ratio": g / c,
            "oracle_graph_s_per_tick": o, "bayes_to_oracle": g / o}
@@ -85,4 +112,8 @@ def cmd_bench(args) -> int:
         print(f"critical path only, {CRITICAL_HOPS} hops: {c * 1e3:7.3f} ms/tick, ratio {g / c:.2f}")
         print(f"oracle intention graph     : {o * 1e3:7.3f} ms/tick; Bayesian recognition costs x{g / o:.2f}")
         print(f"graph resident memory      : {max(rss):7.0f} MiB (4 node processes)")
+        if rec:
+            print(f"graph recording a bag      : {rec['recorded_s_per_tick'] * 1e3:7.3f} ms/tick; with / without --record "
+                  f"{rec['record_ratio']:.3f} (target <= 1.10; per round: "
+                  f"{', '.join(f'{x:.3f}' for x in rec['record_ratio_per_round'])})")
     return 0

@@ -11,6 +11,7 @@ from homeo_decision.scenario import ScenarioError
 from homeo_msgs_py.cli_args import Parser, UserError, float_in, int_at_least, setting
 from homeo_msgs_py.graph import BAYES, INTENTION_MODES
 
+from .live_args import add_live_options
 from .monitor import GraphError
 from .sim import PROG, cmd_sim
 
@@ -37,15 +38,23 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--trace", metavar="FILE", help="the simulation writes one JSON line per tick")
     s.add_argument("--action-timeout", type=float_in(0.01, 3600.0), default=5.0,
                    help="seconds to wait for an action before the tick counts as none (default 5)")
+    s.add_argument("--human", choices=("sim", "person"), default="sim",
+                   help="who plays the human: the simulated one (default) or a person sending JSON on "
+                        "/homeo/human_input (see the README)")
+    s.add_argument("--human-timeout", type=float_in(0.01, 3600.0), default=10.0,
+                   help="seconds a tick waits for the person before it counts as no intention (default 10)")
     s.add_argument("--log-dir", metavar="DIR", help="keep each node's log here (default: a temporary directory)")
     s.add_argument("--json", action="store_true", help="print the metrics as homeo-sim run --json does")
     s.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_live_options(s)
     from .pepper import add_parser as add_pepper
 
     add_pepper(sub)
     b = sub.add_parser("bench", help="seconds per tick of the graph against a raw rclpy chain (the floor)")
     b.add_argument("--iterations", type=int_at_least(10), default=1000, help="ticks of each (default 1000)")
     b.add_argument("--rounds", type=int_at_least(1), default=3, help="alternating graph/floor pairs (default 3)")
+    b.add_argument("--record", action="store_true",
+                   help="also time the graph recording a bag, and print the ratio with / without recording")
     b.add_argument("--json", action="store_true")
     return ap
 

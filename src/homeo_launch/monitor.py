@@ -26,9 +26,14 @@ class Monitor:
         from homeo_msgs_py.qos import sub_qos
         from homeo_msgs_py.schemas import Rejected, Vocabulary, decode
 
+        from rclpy.executors import SingleThreadedExecutor
+
         rclpy.init(signal_handler_options=SignalHandlerOptions.NO)  # Ctrl-C stays a KeyboardInterrupt here
         self.rclpy = rclpy
         self.node = rclpy.create_node("homeo_launch")
+        # one executor for the node's life: rclpy.spin_once(node) adds and removes the node every call
+        self.executor = SingleThreadedExecutor()
+        self.executor.add_node(self.node)
         self.status = None
         voc = Vocabulary()
 
@@ -41,7 +46,7 @@ class Monitor:
         self.node.create_subscription(String, TOPICS["run_status"].name, on_status, sub_qos("run_status"))
 
     def spin(self, timeout: float = 0.05) -> None:
-        self.rclpy.spin_once(self.node, timeout_sec=timeout)
+        self.executor.spin_once(timeout_sec=timeout)
 
     def missing(self, nodes, endpoints) -> list[str]:
         present = set(self.node.get_node_names())
@@ -74,6 +79,8 @@ class Monitor:
             self.node.destroy_client(cli)
 
     def close(self) -> None:
+        self.executor.remove_node(self.node)
+        self.executor.shutdown(timeout_sec=1.0)
         self.node.destroy_node()
         self.rclpy.try_shutdown()
 

@@ -228,7 +228,7 @@ def scenario_file(path: str | None, out_dir: Path, continue_schedule: bool) -> s
 def pepper_specs(*, url: str, scenario: str, overrides: dict, seed: int, dod: float | None, q_table: str | None,
                  interactions: int, collect_window: float, collect_quiet: float, action_timeout: float,
                  end_with_script: bool, user: str = "", password: str = "", config: str = "",
-                 intention: str = "cues") -> list[NodeSpec]:
+                 intention: str = "cues", extra_readers: int = 0) -> list[NodeSpec]:
     common = {"scenario": scenario, "overrides": json.dumps(overrides)}
     decision = dict(common, seed=seed)
     if dod is not None:
@@ -239,7 +239,7 @@ def pepper_specs(*, url: str, scenario: str, overrides: dict, seed: int, dod: fl
     bridge = dict(common, qi_url=url, user=user, password=password, config=os.path.abspath(config) if config else "",
                   interactions=interactions, collect_window=float(collect_window), collect_quiet=float(collect_quiet),
                   action_timeout=float(action_timeout), end_with_script=end_with_script,
-                  intention_cues=intention == "cues", outcome_readers=endpoints(intention)["outcome"][1])
+                  intention_cues=intention == "cues", outcome_readers=endpoints(intention)["outcome"][1] + extra_readers)
     params = {"pepper_bridge": bridge, "homeo_intention": dict(common, mode=INTENTION_MODES[intention]),
               "homeo_drives": dict(common), "homeo_decision": decision}
     return [NodeSpec(n, G.NODES[n].module, params[n]) for n in BRIDGE_NODES]
@@ -247,16 +247,25 @@ def pepper_specs(*, url: str, scenario: str, overrides: dict, seed: int, dod: fl
 
 def run_pepper_graph(specs: list[NodeSpec], log_dir: Path, standin: StandinProcess | None = None, on_row=None,
                      last: dict | None = None, discovery_timeout: float = DISCOVERY_TIMEOUT_S,
-                     env: dict | None = None, intention: str = "cues") -> dict:
+                     env: dict | None = None, intention: str = "cues", sinks=()) -> dict:
     """Run the bridge graph until the bridge reports done; returns its last run status fields.
-    Raises GraphError (a node or the stand-in died, or the graph never came up) or KeyboardInterrupt."""
+    Raises GraphError (a node or the stand-in died, or the graph never came up) or KeyboardInterrupt.
+    ``sinks``: as for ``sim.run_graph``; the robot nodes start first and the bridge waits for the
+    tap on homeo/outcome (``outcome_readers``); its other topics are heard before its first
+    interaction, which collects the user's expression first."""
     os.environ.update(dds_defaults())
     graph = Graph(specs, env or graph_env(), str(log_dir))
-    mon = None
+    mon = tap = None
     shown = 0
     try:
-        graph.start()
         mon = Monitor()
+        if sinks:
+            from .sim import start_robot_first
+            from .tap import Tap
+
+            tap = Tap(mon.node, sinks)
+            start_robot_first(graph, mon, tap, discovery_timeout)
+        graph.start()
         _wait_up(graph, mon, standin, endpoints(intention), discovery_timeout)
         while True:
             mon.spin(0.05)
@@ -274,8 +283,14 @@ def run_pepper_graph(specs: list[NodeSpec], log_dir: Path, standin: StandinProce
                     on_row(r)
             shown = max(shown, len(rows))
             if st.fields["done"]:
+                if tap is not None:
+                    from .sim import drain
+
+                    drain(mon, tap)
                 return dict(st.fields)
     finally:
+        if tap is not None:
+            tap.close()
         if mon is not None:
             mon.close()
         graph.stop()
@@ -305,7 +320,7 @@ def _check_standin(standin: StandinProcess | None) -> None:
 
 # -- one robot ---------------------------------------------------------------------------------
 def run_robot(a, label: str, dod: float | None, q_table: str | None, log_dir: Path, on_row=None,
-              last: dict | None = None) -> dict:
+              last: dict | None = None, sinks=()) -> dict:
     """One graph run (with its own stand-in when asked); returns {"status", "user_log", ...}."""
     from pepper_bridge.user import load_script
 
@@ -329,8 +344,10 @@ def run_robot(a, label: str, dod: float | None, q_table: str | None, log_dir: Pa
                              interactions=a.interactions, collect_window=a.collect_window,
                              collect_quiet=a.collect_quiet, action_timeout=a.action_timeout,
                              end_with_script=bool(a.standin and script), user=a.user or "",
-                             password=a.password or "", config=a.config or "", intention=a.intention)
-        status = run_pepper_graph(specs, log_dir, standin, on_row=on_row, last=last, intention=a.intention)
+                             password=a.password or "", config=a.config or "", intention=a.intention,
+                             extra_readers=1 if sinks else 0)
+        status = run_pepper_graph(specs, log_dir, standin, on_row=on_row, last=last, intention=a.intention,
+                                  sinks=sinks)
         user_log = standin.user_log() if standin is not None else []
         return {"label": label, "dod": dod, "status": status, "user_log": user_log}
     finally:
@@ -412,6 +429,9 @@ def add_parser(subparsers) -> None:
     p.add_argument("--log-dir", metavar="DIR", help="keep each node's log here (default: a temporary directory)")
     p.add_argument("--json", action="store_true", help="print the interaction log as JSON")
     p.add_argument("--quiet", action="store_true", help="no per-interaction progress on stderr")
+    from .live_args import add_live_options
+
+    add_live_options(p)
 
 
 def _check_args(a) -> None:
@@ -422,6 +442,12 @@ def _check_args(a) -> None:
             raise UserError("--field runs DoD 0.25 and DoD 0; leave out --dod")
     if a.script and not a.standin:
         raise UserError("--script needs --standin (a real robot has a real user)")
+    if a.field and (getattr(a, "record", None) or getattr(a, "foxglove", None)):
+        raise UserError("--record and --foxglove watch one robot: leave out --field")
+    if getattr(a, "record", None):
+        from .record import check_new_bag
+
+        check_new_bag(a.record)
     if (a.q_dedicated or a.q_selfish) and not a.field:
         raise UserError("--q-dedicated / --q-selfish go with --field")
     for f in (a.q_table, a.q_dedicated, a.q_selfish):
@@ -504,9 +530,14 @@ def _cmd_one(a, base: Path) -> int:
     if show:
         print(HEADER, file=sys.stderr)
     last: dict = {}
+    from homeo_decision.scenario import load_scenario
+
+    from .sim import close_sinks, open_sinks
+
+    sinks = open_sinks(a, "pepper", a.interactions, a.seed, load_scenario(a.scenario), {})
     try:
         run = run_robot(a, "robot", a.dod, a.q_table, base, on_row=(lambda r: print(_row_line(r), file=sys.stderr))
-                        if show else None, last=last)
+                        if show else None, last=last, sinks=sinks)
         code = 0
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted; all nodes stopped", file=sys.stderr)
@@ -514,7 +545,8 @@ def _cmd_one(a, base: Path) -> int:
         code = 0 if a.interactions == 0 and not a.script else 130  # an unbounded run ends with Ctrl-C
         if not (last.get("extra") or {}).get("log"):
             return 130
-    from homeo_decision.scenario import load_scenario
+    finally:
+        close_sinks(sinks)
 
     res = field_result(run, a.seed, float(load_scenario(a.scenario).learning["dod"]), roles=_roles(a))
     st = run["status"]

@@ -61,8 +61,11 @@ class Graph:
         self.log_dir.mkdir(parents=True, exist_ok=True)
         self.procs: dict[str, subprocess.Popen] = {}
 
-    def start(self) -> None:
+    def start(self, names=None) -> None:
+        """Start the nodes ``names`` (default: all) that are not started yet."""
         for s in self.specs:
+            if s.name in self.procs or (names is not None and s.name not in names):
+                continue
             pfile = self.log_dir / f"{s.name}.params.json"
             # JSON is YAML: rcl reads it as a parameters file; strings stay strings
             pfile.write_text(json.dumps({s.name: {"ros__parameters": s.params}}))

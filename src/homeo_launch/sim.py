@@ -18,7 +18,7 @@ import json
 import os
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from homeo_msgs_py.cli_args import UserError
 from homeo_msgs_py.graph import BAYES, GRAPHS, NODES, endpoints
@@ -47,6 +47,9 @@ class SimOptions:
     trace: str | None = None
     action_timeout: float = 5.0
     intention: str = BAYES  # the graph recognises intentions; ORACLE is the thesis's simulation
+    human: str = "sim"  # or "person": a person on homeo/human_input plays the human
+    human_timeout: float = 10.0  # seconds a tick waits for the person
+    extra_readers: int = 0  # the launcher's tap (a recorder, a live view): the run waits for it
 
 
 def sim_specs(o: SimOptions) -> list[NodeSpec]:
@@ -64,23 +67,36 @@ def sim_specs(o: SimOptions) -> list[NodeSpec]:
         decision["load_on_start"] = True
     sim = dict(common, seed=o.seed, iterations=o.iterations, rate=float(o.rate),
                action_timeout=float(o.action_timeout), trace_path=os.path.abspath(o.trace) if o.trace else "",
-               intention_accuracy=o.intention == BAYES)
+               intention_accuracy=o.intention == BAYES, extra_readers=o.extra_readers, human=o.human,
+               human_timeout=float(o.human_timeout))
     params = {"homeo_sim": sim, "homeo_intention": dict(common, mode=o.intention), "homeo_drives": dict(common),
               "homeo_decision": decision}
     return [NodeSpec(n, NODES[n].module, params[n]) for n in GRAPHS["sim"]]
 
 
 def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on_progress=None,
-              discovery_timeout: float = DISCOVERY_TIMEOUT_S, last: dict | None = None) -> dict:
+              discovery_timeout: float = DISCOVERY_TIMEOUT_S, last: dict | None = None, sinks=()) -> dict:
     """Run the simulated graph to the end; returns the last run status fields (metrics included)
-    plus ``elapsed_s`` (first tick to done) and ``rss_mb``. Raises GraphError or KeyboardInterrupt."""
+    plus ``elapsed_s`` (first tick to done) and ``rss_mb``. Raises GraphError or KeyboardInterrupt.
+    ``sinks`` (a bag, a live view) get every message of the run from the launcher's tap
+    (``tap.py``); the simulation waits for the tap's subscriptions before tick 0."""
     env = graph_env()
     os.environ.update(dds_defaults())  # the launcher's own node too
+    if sinks:
+        o = replace(o, extra_readers=1)
     graph = Graph(sim_specs(o), env, log_dir)
-    mon = None
+    mon = tap = None
     try:
-        graph.start()
         mon = Monitor()
+        if sinks:
+            from .tap import Tap
+
+            tap = Tap(mon.node, sinks)
+            for s in sinks:
+                if hasattr(s, "attach"):
+                    s.attach(mon.node)
+            start_robot_first(graph, mon, tap, discovery_timeout)
+        graph.start()
         wait_until_up(graph, mon, GRAPHS["sim"], endpoints("sim", o.intention == BAYES), discovery_timeout)
         t_start = None
         last_tick = -1
@@ -100,6 +116,8 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
                     on_progress(st.tick, st.fields)
             if st.fields["done"]:
                 break
+        if tap is not None:
+            drain(mon, tap)
         out = dict(mon.status.fields)
         out["elapsed_s"] = (out.get("extra") or {}).get("elapsed_s", time.monotonic() - t_start)
         out["rss_mb"] = graph.rss_mb()
@@ -122,6 +140,8 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
                 last.update(mon.status.fields)
         raise
     finally:
+        if tap is not None:
+            tap.close()
         if mon is not None:
             mon.close()
         codes = graph.stop()
@@ -129,6 +149,35 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
         if not quiet and any(c not in (0, None, -2, 130) for c in codes.values()):
             bad = ", ".join(f"{n}={c}" for n, c in codes.items() if c not in (0, None, -2, 130))
             print(f"{PROG}: note: nodes stopped with exit codes {bad}", file=sys.stderr)
+
+
+def start_robot_first(graph: Graph, mon: Monitor, tap, bound: float) -> None:
+    """With a tap: start the robot nodes, wait until the tap hears each of their topics, then the
+    world node (started by the caller), which waits for the tap on its own topics (``extra_readers``)
+    before tick 0. So the tap misses no tick of any topic."""
+    robot = [s.name for s in graph.specs if NODES[s.name].role != "world"]
+    graph.start(robot)
+    keys = {k for n in robot for k in NODES[n].publishes}
+    end = time.monotonic() + bound
+    while True:
+        check_alive(graph)
+        missing = tap.unmatched(keys)
+        if not missing:
+            return
+        if time.monotonic() > end:
+            raise GraphError(f"the recorder did not hear {', '.join(missing)} within {bound:g} s")
+        mon.spin(0.1)
+
+
+def drain(mon: Monitor, tap, bound: float = 2.0) -> None:
+    """After the run: take in what is still on its way to the tap (the final messages), until the
+    tap has seen the final run status and a spin brings nothing new; bounded."""
+    end = time.monotonic() + bound
+    while time.monotonic() < end:
+        n = tap.count
+        mon.spin(0.05)  # the tap spins in its own thread; this only lets time pass
+        if tap.done and tap.count == n:
+            return
 
 
 def _set_param(mon: Monitor, node: str, name: str, value) -> tuple[bool, str]:
@@ -160,11 +209,42 @@ def options_from_args(a) -> SimOptions:
             raise UserError(f"Q-table file not found: {f}")
     if a.trace and os.path.dirname(os.path.abspath(a.trace)) and not os.path.isdir(os.path.dirname(os.path.abspath(a.trace))):
         raise UserError(f"--trace {a.trace}: the directory does not exist")
+    if getattr(a, "record", None):
+        from .record import check_new_bag
+
+        check_new_bag(a.record)
     load_scenario(a.scenario, overrides=dict(a.set))  # a bad scenario is a one-line error here, not in four nodes
     return SimOptions(iterations=a.iterations, rate=a.rate, seed=a.seed, dod=a.dod, xi=a.xi,
                       pseudo_update=False if a.no_pseudo else None, scenario=a.scenario, overrides=tuple(a.set),
                       load_q=a.load_q, save_q=a.save_q, trace=a.trace, action_timeout=a.action_timeout,
-                      intention=a.intention)
+                      intention=a.intention, human=a.human, human_timeout=a.human_timeout)
+
+
+def open_sinks(a, graph: str, iterations: int, seed: int, sc, overrides, **extra) -> list:
+    """The tap's sinks the command line asks for: ``--record DIR`` (a bag), ``--foxglove`` (live)."""
+    sinks = []
+    try:
+        if getattr(a, "record", None):
+            from .record import BagSink, check_new_bag, run_info
+            from .tap import tapped_topics
+
+            sinks.append(BagSink(check_new_bag(a.record), run_info(graph, iterations, seed, sc, overrides, **extra),
+                                 tapped_topics()))
+        if getattr(a, "foxglove", None):
+            from .live import FoxgloveSink
+
+            sinks.append(FoxgloveSink(a.foxglove, sc, person=getattr(a, "human", "sim") == "person"))
+            if not getattr(a, "quiet", False):
+                print(f"{PROG}: Foxglove: open ws://{a.foxglove[0]}:{sinks[-1].port}", file=sys.stderr)
+    except BaseException:
+        close_sinks(sinks)
+        raise
+    return sinks
+
+
+def close_sinks(sinks) -> None:
+    for s in sinks:
+        s.close()
 
 
 def cmd_sim(a) -> int:
@@ -188,13 +268,16 @@ def cmd_sim(a) -> int:
 
     last: dict = {}
     status = None
+    sinks = []
     try:
-        status = run_graph(o, quiet=a.quiet, log_dir=a.log_dir, on_progress=progress, last=last)
+        sinks = open_sinks(a, "sim", o.iterations, o.seed, sc, o.overrides, intention=o.intention)
+        status = run_graph(o, quiet=a.quiet, log_dir=a.log_dir, on_progress=progress, last=last, sinks=sinks)
     except KeyboardInterrupt:
         pass
     finally:
         if bar is not None:
             bar.close()
+        close_sinks(sinks)
     if status is None:  # Ctrl-C: the nodes are stopped; show what the run measured so far
         print(f"{PROG}: interrupted; all nodes stopped", file=sys.stderr)
         if not last.get("metrics"):

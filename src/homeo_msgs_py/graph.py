@@ -61,6 +61,8 @@ TOPICS: dict[str, Topic] = {
     "action": Topic("homeo/action", "homeo/action", EVENT),
     "outcome": Topic("homeo/outcome", "homeo/outcome", EVENT),
     "run_status": Topic("homeo/run_status", "homeo/run_status", STATE),
+    # a person playing the human (``--human person``): read by the simulation in that mode only
+    "human_input": Topic("homeo/human_input", "homeo/human_input", EVENT),
 }
 DIAGNOSTICS = "/diagnostics"  # absolute: every node reports to the one aggregator topic
 DEVICE = "homeo/device"  # std_msgs/String plain JSON from the Pepper bridge (Play/Stop/... commands)

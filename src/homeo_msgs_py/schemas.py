@@ -177,6 +177,20 @@ def _prob_map(kind: str) -> Check:
     return check
 
 
+PRAISE_SCOLD = {"praise": 1, "scold": -1}
+
+
+def _praise_scold(v, voc, where):
+    """A person's answer: "praise" or "scold" (or +1 / -1), null or 0 for none; kept as +1/-1/0."""
+    if v is None:
+        return 0
+    if isinstance(v, str) and v in PRAISE_SCOLD:
+        return PRAISE_SCOLD[v]
+    if not isinstance(v, bool) and v in (-1, 0, 1):
+        return int(v)
+    raise Rejected(f"{where} must be \"praise\", \"scold\" or null, got {v!r}")
+
+
 def _any_json(v, voc, where):
     return v
 
@@ -248,6 +262,14 @@ SCHEMAS: dict[str, dict[str, tuple[Check, bool]]] = {
         # ground truth of the simulated human, for the metrics only (robot nodes never read it)
         "truth": (_obj({"intention": (_one_of("intentions"), True), "expressed": (_bool, True),
                         "satisfied": (_bool, True)}), False),
+    },
+    # a person -> simulation (``--human person``): a wish, and the answer to the robot's last action.
+    # Sent by hand (ros2 topic pub, homeo-topic pub, Foxglove), so the envelope may be left out:
+    # ``homeo_msgs_py.human_input.decode_human_input``
+    "homeo/human_input": {
+        "intention": (_one_of("intentions", nullable=True), False),  # null or "none": no wish
+        "feedback": (_praise_scold, False),
+        "proposal": (_one_of("actions", nullable=True), False),
     },
     # simulation -> launcher: progress and, at the end, the run's metrics
     "homeo/run_status": {

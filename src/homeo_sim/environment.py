@@ -25,10 +25,11 @@ class SimEnvironment:
     observation (an oracle reads it; a recogniser ignores it). ``body_after``: report the body
     right after each action in the outcome (default: when the scenario's open choices need it)."""
 
-    def __init__(self, sc: Scenario, seed: int = 0, cues: bool = False, body_after: bool | None = None):
+    def __init__(self, sc: Scenario, seed: int = 0, cues: bool = False, body_after: bool | None = None,
+                 human: SimHuman | None = None):
         self.sc = sc
         self.world = World(sc)
-        self.human = SimHuman(sc, seed)
+        self.human = human if human is not None else SimHuman(sc, seed)  # or a person (person.PersonHuman)
         self.body = SimBody(sc)
         self.cues = cues and sc.observations is not None
         self._unseen = [w[0] for w in sc.c.with_intention]  # the world code with the intention `none`
@@ -58,6 +59,12 @@ class SimEnvironment:
         self.world.set_human(h.present, h.intention)
         cues = h.observe() if self.cues else None  # how the human shows its wish this tick
         self._obs = Observation(self._unseen[self.world.code], self.body.values, h.intention, cues)
+
+    def start(self) -> None:
+        """Before tick 0: a person playing the human now states the first wish (may block)."""
+        if hasattr(self.human, "start"):
+            self.human.start()
+            self._advance_human()
 
     def observe(self) -> Observation:
         """What the robot can sense now. The record is the environment's own, updated in place by

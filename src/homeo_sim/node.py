@@ -2,11 +2,13 @@
 
 Publishes  homeo/world (state), homeo/observation (event), homeo/outcome (event),
            homeo/run_status (state: progress, and the metrics of Section 4.1), /diagnostics
-Subscribes homeo/action (tick k's action, with the robot's drives that the metrics need)
+Subscribes homeo/action (tick k's action, with the robot's drives that the metrics need),
+           homeo/human_input (only with human:=person: a person's wishes and answers)
 Services   ~/reset (std_srvs/Trigger): a new run from tick 0 (the robot keeps its Q-table)
 Parameters seed (int), iterations (int, 0 = until stopped), rate (Hz, 0 = as fast as lockstep
            allows), action_timeout (s), trace_path (JSON lines per tick, '' = none),
-           wait_for_readers (bool), intention_accuracy, scenario, overrides
+           wait_for_readers (bool), extra_readers (int), intention_accuracy, human (sim | person),
+           human_timeout (s), scenario, overrides
 
 The tick itself is ``homeo_msgs_py.lockstep.LockstepDriver`` over ``world_side.SimWorldSide``;
 this node declares parameters, waits for its readers and writers (``homeo_msgs_py.graph``) and
@@ -30,6 +32,7 @@ from .world_side import SimWorldSide
 
 DESC = NODES["homeo_sim"]
 STATUS_PERIOD_S = 0.25
+SIM_HUMAN, PERSON = "sim", "person"
 POLL_S = 0.02
 
 
@@ -50,16 +53,28 @@ class SimNode(ScenarioNode):
         self.declare_parameter("trace_path", "", d(description="write one JSON line per tick here ('' = no trace)"))
         self.declare_parameter("wait_for_readers", True, d(description="start only when the graph's readers and "
                                                            "writers have matched"))
+        self.declare_parameter("extra_readers", 0, d(
+            description="readers beyond the graph's to wait for on every topic before tick 0 (a recorder, a live "
+                        "view): so that they miss nothing of the run", read_only=True,
+            integer_range=[IntegerRange(from_value=0, to_value=100, step=1)]))
         self.declare_parameter("intention_accuracy", False, d(
             description="score the recognised intention of each action against the human's (bayes mode); the "
                         "intention node then learns from the outcome, so the gate waits for its reader too",
             read_only=True))
+        self.declare_parameter("human", SIM_HUMAN, d(description="who plays the human: the simulated one (sim) or a "
+                                                     "person on homeo/human_input (person)", read_only=True))
+        self.declare_parameter("human_timeout", 10.0, d(
+            description="seconds a tick waits for the person before it counts as no intention (no answer)",
+            floating_point_range=[FloatingPointRange(from_value=0.01, to_value=3600.0)]))
         p = self.get_parameter
         self.learning = p("intention_accuracy").value
-        self.side = SimWorldSide(self.sc, p("seed").value, self.learning, self._open_trace(p("trace_path").value))
+        human, run_async, self._pool = self._human(p("human").value, p("seed").value)
+        self.side = SimWorldSide(self.sc, p("seed").value, self.learning, self._open_trace(p("trace_path").value),
+                                 human=human)
         self.pubs = {key: self.publisher(key) for key in DESC.publishes}
         self.driver = LockstepDriver(self.side, self._send, iterations=p("iterations").value, rate=p("rate").value,
-                                     timeout=p("action_timeout").value, log=self._log, note=self.rejects.note)
+                                     timeout=p("action_timeout").value, log=self._log, note=self.rejects.note,
+                                     run_async=run_async)
         self.driver.on_done = self._publish_status
         self.add_on_set_parameters_callback(self._on_params)
         self.subscribe("action", self.driver.on_action)
@@ -67,6 +82,38 @@ class SimNode(ScenarioNode):
         self._wait_logged = 0.0
         self.create_timer(POLL_S, self._poll)
         self.create_timer(STATUS_PERIOD_S, self._publish_status)
+
+    def _human(self, kind: str, seed: int):
+        """The simulated human (None: the environment's own), or a person whose messages on
+        homeo/human_input fill its inbox; the world then steps off the executor (it waits for them)."""
+        if kind == SIM_HUMAN:
+            return None, None, None
+        if kind != PERSON:
+            raise NodeConfigError(f"human must be {SIM_HUMAN} or {PERSON}, not {kind!r}")
+        from concurrent.futures import ThreadPoolExecutor
+
+        from std_msgs.msg import String
+
+        from homeo_msgs_py.human_input import decode_human_input
+        from homeo_msgs_py.qos import quiet_sub_events, sub_qos
+        from homeo_msgs_py.schemas import Rejected
+
+        from .person import PersonHuman
+
+        person = PersonHuman(self.sc, seed, self.get_parameter("human_timeout").value)
+        topic = [TOPICS["human_input"].name]
+
+        def on_input(msg: String) -> None:
+            try:
+                person.inbox.put(decode_human_input(msg.data, self.voc))
+            except Rejected as exc:
+                self.reject(topic[0], str(exc))
+
+        sub = self.create_subscription(String, topic[0], on_input, sub_qos("human_input"),
+                                       event_callbacks=quiet_sub_events())
+        topic[0] = sub.topic_name
+        pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="person")
+        return person, pool.submit, pool
 
     def _send(self, key: str, tick: int, fields: dict, run: int) -> None:
         self.send(self.pubs[key], tick, fields, run)
@@ -82,6 +129,8 @@ class SimNode(ScenarioNode):
                 drv.set_rate(prm.value)
             elif prm.name == "action_timeout":
                 drv.timeout = prm.value
+            elif prm.name == "human_timeout" and hasattr(self.side.env.human, "timeout"):
+                self.side.env.human.timeout = prm.value
             elif prm.name == "iterations":
                 if prm.value and prm.value <= drv.tick and drv.state == RUNNING:
                     return SetParametersResult(successful=False, reason=f"the run is already at tick {drv.tick}")
@@ -101,8 +150,9 @@ class SimNode(ScenarioNode):
         if not self.get_parameter("wait_for_readers").value:
             return []
         out = []
+        extra = self.get_parameter("extra_readers").value
         for key, pub in self.pubs.items():
-            want = readers("sim", key, self.learning)
+            want = readers("sim", key, self.learning) + extra
             if pub.matched() < want:
                 out.append(f"{pub.topic} has {pub.matched()}/{want} readers")
         for i in DESC.inputs:
@@ -146,6 +196,9 @@ class SimNode(ScenarioNode):
         return response
 
     def destroy_node(self):
+        if self._pool is not None:
+            self.side.env.human.inbox.put(None)  # a wait in progress ends now (as silence)
+            self._pool.shutdown(wait=False, cancel_futures=True)
         if self.side.trace is not None:
             self.side.trace.close()
             self.side.trace = None

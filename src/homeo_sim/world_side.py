@@ -20,13 +20,14 @@ from .metrics import MetricRecorder, accuracy_ends
 
 class SimWorldSide:
     last_missed = False  # the simulation always acts
-    def __init__(self, sc: Scenario, seed: int = 0, intention_accuracy: bool = False, trace=None):
+
+    def __init__(self, sc: Scenario, seed: int = 0, intention_accuracy: bool = False, trace=None, human=None):
         self.sc = sc
         self.intention_accuracy = intention_accuracy  # score the intention each action was chosen for
         self.sample_after = sc.open["metrics_sample"] == "after_action"
         self.drives_key = "after_action" if self.sample_after else "drives"
         self.trace = trace  # a text file: one JSON line per tick
-        self.env = SimEnvironment(sc, seed, cues=True, body_after=True)
+        self.env = SimEnvironment(sc, seed, cues=True, body_after=True, human=human)
         self.reset(seed)
 
     def reset(self, seed: int | None = None) -> None:
@@ -37,7 +38,7 @@ class SimWorldSide:
 
     # -- WorldSide ---------------------------------------------------------------------------
     def start(self) -> None:
-        pass
+        self.env.start()
 
     def observe(self, final: bool) -> tuple[dict, dict]:
         obs = self.env.observe()
