@@ -13,6 +13,8 @@ With ``--human person`` the app's Publish panel can play the human: a client cha
 
 from __future__ import annotations
 
+import time
+
 import json
 
 from homeo_msgs_py.graph import TOPICS
@@ -20,6 +22,9 @@ from homeo_msgs_py.graph import TOPICS
 from .tap import DIAG_KEY, Tapped, string_data
 
 SERVER_NAME = "homeo-robot"
+
+
+MATCH_WAIT_S = 10.0  # how long a client's message waits for the topic's reader
 
 
 class _Listener:
@@ -100,7 +105,16 @@ class FoxgloveSink:
 
         name = "/" + TOPICS["human_input"].name
         pub = node.create_publisher(String, name, pub_qos("human_input"))
-        self.listener.accept[name] = lambda text: pub.publish(String(data=text))  # rcl publish is thread-safe
+
+        def forward(text: str) -> None:
+            # a volatile event is lost if published before the simulation's reader matched (the person's
+            # first word starts the run): hold it until then, bounded (this is the server's thread)
+            end = time.monotonic() + MATCH_WAIT_S
+            while pub.get_subscription_count() < 1 and time.monotonic() < end:
+                time.sleep(0.05)
+            pub.publish(String(data=text))  # rcl publish is thread-safe
+
+        self.listener.accept[name] = forward
 
     def write(self, t: Tapped, stamp_ns: int, raw: bytes) -> None:
         entry = self.channels.get(t.name)
