@@ -80,6 +80,11 @@ def observation_fields(sc: Scenario, obs: Observation) -> dict:
     return out
 
 
+def observation_messages(sc: Scenario, obs: Observation, final: bool = False) -> tuple[dict, dict]:
+    """``homeo/world`` and ``homeo/observation`` fields of one observation (a world node's tick)."""
+    return world_fields(sc, obs, final), observation_fields(sc, obs)
+
+
 def observation_from_fields(sc: Scenario, world: dict | None, seen: dict | None) -> Observation:
     """The Observation of a ``homeo/world`` and/or a ``homeo/observation`` payload (either may be
     None: the intention node reads only the second, the drives node only the first)."""

@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 
 from homeo_decision.qtable_io import QTableError
 from homeo_decision.scenario import ScenarioError
-from homeo_msgs_py.cli_args import Parser, UserError, float_in, int_at_least, setting
+from homeo_msgs_py.cli_args import Parser, UserError, float_in, int_at_least, run_command, setting
 from homeo_msgs_py.graph import BAYES, INTENTION_MODES
 
 from .live_args import add_live_options
@@ -69,9 +68,8 @@ def main(argv=None) -> int:
     signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
     # Ctrl-C however the launcher was started: a script's background job inherits SIGINT ignored
     signal.signal(signal.SIGINT, signal.default_int_handler)
-    ap = build_parser()
-    try:
-        args = ap.parse_args(argv)
+    def command() -> int:
+        args = build_parser().parse_args(argv)
         if args.cmd == "sim":
             return cmd_sim(args)
         if args.cmd == "pepper":
@@ -81,19 +79,8 @@ def main(argv=None) -> int:
         from .bench import cmd_bench
 
         return cmd_bench(args)
-    except (UserError, ScenarioError, QTableError) as exc:
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
-        return 2
-    except GraphError as exc:
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
-        return 1
-    except BrokenPipeError:
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 141
-    except KeyboardInterrupt:
-        print(f"{PROG}: interrupted", file=sys.stderr)
-        return 130
 
+    return run_command(PROG, command, (ScenarioError, QTableError), (GraphError,))
 
 if __name__ == "__main__":
     sys.exit(main())

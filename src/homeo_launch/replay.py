@@ -19,7 +19,7 @@ import os
 import sys
 from pathlib import Path
 
-from homeo_msgs_py.cli_args import Parser, UserError, float_in
+from homeo_msgs_py.cli_args import Parser, UserError, float_in, run_command
 
 from .bag import BagError, RecordedRun, load_run
 
@@ -167,17 +167,7 @@ def main(argv=None) -> int:
     from homeo_decision.qtable_io import QTableError
     from homeo_decision.scenario import ScenarioError
 
-    try:
-        return run_cli(build_parser().parse_args(argv))
-    except (UserError, BagError, QTableError, ScenarioError) as exc:
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
-        return 2
-    except BrokenPipeError:
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 141
-    except KeyboardInterrupt:
-        print(f"{PROG}: interrupted", file=sys.stderr)
-        return 130
+    return run_command(PROG, lambda: run_cli(build_parser().parse_args(argv)), (BagError, QTableError, ScenarioError))
 
 
 if __name__ == "__main__":

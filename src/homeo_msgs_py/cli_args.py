@@ -49,3 +49,32 @@ def setting(s: str) -> tuple[str, object]:
     except json.JSONDecodeError:
         val = v
     return k.strip(), val
+
+
+def run_command(prog: str, command, user_errors: tuple = (), failures: tuple = (), os_errors: bool = False) -> int:
+    """Run ``command()`` as a command-line program: a user's mistake (``UserError`` or one of
+    ``user_errors``) is one line and exit 2, one of ``failures`` (the program failed, e.g. a node
+    died) one line and exit 1; a closed pipe ends quietly (141), Ctrl-C with 130. With
+    ``os_errors`` an OSError is a user's mistake too (a file they named)."""
+    import os
+    import sys
+
+    try:
+        return command()
+    except (UserError, *user_errors) as exc:
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return 2
+    except failures as exc:
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return 1
+    except BrokenPipeError:  # e.g. piped into head: stop quietly, as Unix tools do
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
+    except OSError as exc:
+        if not os_errors:
+            raise
+        print(f"{prog}: error: {exc.filename or ''}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return 130

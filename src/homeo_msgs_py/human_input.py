@@ -9,10 +9,9 @@ out of range are refused with a one-line reason (``Rejected``).
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 
-from .schemas import ENVELOPE, SCHEMAS, VERSION, Rejected, Vocabulary, _fields
+from .schemas import ENVELOPE, SCHEMAS, VERSION, Rejected, Vocabulary, _fields, parse_json
 
 SCHEMA = "homeo/human_input"
 MAX_TEXT = 4096  # a person's message is a line
@@ -28,14 +27,7 @@ class HumanInput:
 
 
 def decode_human_input(text, voc: Vocabulary) -> HumanInput:
-    if not isinstance(text, str):
-        raise Rejected("not a string")
-    if len(text) > MAX_TEXT:
-        raise Rejected(f"message of {len(text)} characters is too long for a person's input")
-    try:
-        obj = json.loads(text)
-    except (json.JSONDecodeError, RecursionError) as exc:
-        raise Rejected(f"not JSON ({getattr(exc, 'msg', exc)})") from None
+    obj = parse_json(text, MAX_TEXT, " for a person's input")
     if not isinstance(obj, dict):
         raise Rejected(f"not a JSON object but {type(obj).__name__}")
     if "schema" in obj and obj["schema"] != SCHEMA:

@@ -308,17 +308,21 @@ def encode(schema: str, tick: int, fields: dict, run: int = 0, stamp: float | No
     return json.dumps(env, separators=(",", ":"))
 
 
-def decode(text: str, voc: Vocabulary, expect: str | None = None) -> Message:
-    """Parse and validate one message; raises :class:`Rejected` with the reason."""
+def parse_json(text, limit: int = MAX_TEXT, what: str = "") -> Any:
+    """The JSON value of a message's text, or :class:`Rejected` (not a string, too long, not JSON)."""
     if not isinstance(text, str):
         raise Rejected("not a string")
-    if len(text) > MAX_TEXT:
-        raise Rejected(f"message of {len(text)} characters is too long")
+    if len(text) > limit:
+        raise Rejected(f"message of {len(text)} characters is too long{what}")
     try:
-        obj = json.loads(text)
+        return json.loads(text)
     except (json.JSONDecodeError, RecursionError) as exc:
         raise Rejected(f"not JSON ({exc.msg if hasattr(exc, 'msg') else exc})") from None
-    return validate(obj, voc, expect)
+
+
+def decode(text: str, voc: Vocabulary, expect: str | None = None) -> Message:
+    """Parse and validate one message; raises :class:`Rejected` with the reason."""
+    return validate(parse_json(text), voc, expect)
 
 
 def validate(obj: Any, voc: Vocabulary, expect: str | None = None) -> Message:

@@ -27,7 +27,7 @@ from homeo_decision.scenario import ScenarioError
 
 from homeo_decision.baselines import POLICIES
 
-from homeo_msgs_py.cli_args import UserError, float_in, int_at_least, Parser, setting
+from homeo_msgs_py.cli_args import Parser, UserError, float_in, int_at_least, run_command, setting
 from homeo_msgs_py.graph import BAYES, INTENTION_MODES, ORACLE
 
 from .runner import RunConfig, build_scenario, run_episode, run_seeds
@@ -297,32 +297,11 @@ def cmd_bench(args) -> int:
 
 
 def main(argv=None) -> int:
-    ap = build_parser()
-    try:
-        args = ap.parse_args(argv)
-        if args.cmd == "run":
-            return cmd_run(args)
-        if args.cmd == "sweep":
-            return cmd_sweep(args)
-        if args.cmd == "report":
-            return cmd_report(args)
-        return cmd_bench(args)
-    except UserError as exc:
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
-        return 2
-    except (ScenarioError, QTableError, IntentionModelError) as exc:
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
-        return 2
-    except BrokenPipeError:  # e.g. piped into head: stop quietly, as Unix tools do
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 141
-    except OSError as exc:
-        print(f"{PROG}: error: {exc.filename or ''}: {exc.strerror or exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print(f"{PROG}: interrupted", file=sys.stderr)
-        return 130
+    def command() -> int:
+        args = build_parser().parse_args(argv)
+        return {"run": cmd_run, "sweep": cmd_sweep, "report": cmd_report, "bench": cmd_bench}[args.cmd](args)
 
+    return run_command(PROG, command, (ScenarioError, QTableError, IntentionModelError), os_errors=True)
 
 if __name__ == "__main__":
     sys.exit(main())

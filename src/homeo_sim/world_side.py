@@ -41,8 +41,7 @@ class SimWorldSide:
         self.env.start()
 
     def observe(self, final: bool) -> tuple[dict, dict]:
-        obs = self.env.observe()
-        return codec.world_fields(self.sc, obs, final), codec.observation_fields(self.sc, obs)
+        return codec.observation_messages(self.sc, self.env.observe(), final)
 
     def check_action(self, fields: dict, tick: int) -> None:
         if tick > 0 and fields.get(self.drives_key) is None:

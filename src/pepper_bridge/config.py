@@ -32,7 +32,11 @@ def default_config_path() -> Path:
 
 
 class ConfigError(ValueError):
-    """A config file that cannot be used; the message names the file and the key."""
+    """A config file that cannot be used; the message names the file and the key, on one line
+    (a key or value quoted from the file may hold a line break: it is shown escaped)."""
+
+    def __init__(self, message: str):
+        super().__init__(str(message).replace("\r", "\\r").replace("\n", "\\n"))
 
 
 @dataclass(frozen=True)
@@ -139,7 +143,7 @@ def config_from_dict(raw: Any, source: str = "<memory>", scenario=None) -> Peppe
             fail(f"places.{k}", "must be [x, y] in metres")
         pl[k] = (float(v[0]), float(v[1]))
     start = raw.get("start_location")
-    if start not in pl:
+    if not isinstance(start, str) or start not in pl:
         fail("start_location", f"{start!r} is not one of the places {list(pl)}")
     nav = raw.get("navigation", NAVIGATION[0])
     if nav not in NAVIGATION:
@@ -217,7 +221,7 @@ def _action(name: str, spec: Any, places: dict, fail) -> RobotAction:
     if unknown:
         fail(f"{key}.{unknown[0]}", f"unknown key (known: {', '.join(ACTION_KEYS)})")
     move = spec.get("move")
-    if move is not None and move not in places:
+    if move is not None and (not isinstance(move, str) or move not in places):
         fail(f"{key}.move", f"{move!r} is not one of the places {list(places)}")
     rest = spec.get("rest", False)
     if not isinstance(rest, bool):

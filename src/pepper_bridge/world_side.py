@@ -34,8 +34,7 @@ class PepperWorldSide:
         self.env.reset()
 
     def observe(self, final: bool) -> tuple[dict, dict]:
-        obs = self.env.observe()
-        return codec.world_fields(self.sc, obs, final), codec.observation_fields(self.sc, obs)
+        return codec.observation_messages(self.sc, self.env.observe(), final)
 
     def check_action(self, fields: dict, tick: int) -> None:
         pass  # any action of the vocabulary will do; the robot refuses what it cannot perform
