@@ -77,6 +77,9 @@ class DecisionCore(Perceiving):
                         feedback_value=sc.feedback_value if feedback_value is None else feedback_value,
                         feedback=feedback)
         self._phase_from, self._phase_until, self._phase = 0, -1, self.schedule[0]  # empty: computed at first use
+        # ticks learned before this run (a robot that resumes from a checkpoint): the schedule of
+        # tick t is the scenario's at t + tick_offset, so it goes on rather than starting again
+        self.tick_offset = 0
         self.reseed(seed)
 
     def set_params(self, *, dod=None, xi=None, gamma=None, pseudo_update=None, feedback_value=None, feedback=None) -> None:
@@ -104,12 +107,19 @@ class DecisionCore(Perceiving):
     def phase(self, t: int):
         """The alpha/tau phase of tick t, cached over the ticks it spans (learning asks for t-1 and
         selection for t, every tick)."""
+        t += self.tick_offset
         if not self._phase_from <= t < self._phase_until:
             ph = self._phase = phase_at(self.schedule, t)
             later = [p.start for p in self.schedule if p.start > ph.start]
             self._phase_from = ph.start if t >= ph.start else t  # before the first phase: that tick only
             self._phase_until = min(later) if later else float("inf")
         return self._phase
+
+    def set_tick_offset(self, offset: int) -> None:
+        if offset < 0:
+            raise ValueError(f"tick offset must be >= 0, got {offset}")
+        self.tick_offset = int(offset)
+        self._phase_from, self._phase_until = 0, -1  # the cached phase is of other ticks
 
     def reseed(self, seed: int) -> None:
         self.seed = int(seed)

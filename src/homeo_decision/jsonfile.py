@@ -9,17 +9,44 @@ from pathlib import Path
 
 
 def write_atomic(path: str | Path, obj, error: type[Exception], what: str) -> None:
-    """Write ``obj`` as compact JSON atomically, so a crash never leaves half a file."""
+    """Write ``obj`` as compact JSON atomically, so a crash never leaves half a file: a temporary
+    file in the same folder, flushed to disk, then renamed over the target (POSIX rename is atomic).
+    The temporary file is removed on any failure, Ctrl-C included; only SIGKILL between its creation
+    and the rename can leave one behind (``*.tmp``, never under the target's name)."""
     p = Path(path)
     data = json.dumps(obj, separators=(",", ":"))
+    tmp = None
     try:
         p.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=p.parent, prefix=p.name, suffix=".tmp")
+        fd, tmp = tempfile.mkstemp(dir=p.parent, prefix=f"{p.name}.", suffix=".tmp")
         with os.fdopen(fd, "w") as fh:
             fh.write(data)
+            fh.flush()
+            os.fsync(fh.fileno())  # the data is on disk before the name points at it
         os.replace(tmp, p)
+        tmp = None
+        _fsync_dir(p.parent)  # and the rename itself survives a power loss
     except OSError as exc:
         raise error(f"cannot write {what} {p}: {exc.strerror or exc}") from None
+    finally:
+        if tmp is not None:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+
+
+def _fsync_dir(d: Path) -> None:
+    try:
+        fd = os.open(d, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
 
 
 def read(path: str | Path, error: type[Exception], what: str):

@@ -22,21 +22,42 @@ def component_rng(seed: int, component: str) -> np.random.Generator:
 class UniformStream:
     """Uniform floats in [0, 1) from a component's generator, drawn in blocks."""
 
-    __slots__ = ("rng", "_buf", "_i", "_block")
+    __slots__ = ("rng", "_buf", "_i", "_block", "_before")
 
     def __init__(self, seed: int, component: str, block: int = 4096):
         self.rng = component_rng(seed, component)
         self._block = block
         self._buf: list[float] = []
         self._i = block  # past the end: the first draw fills the buffer
+        self._before = self.rng.bit_generator.state  # the generator before the current block
 
     def random(self) -> float:
         i = self._i
         if i >= self._block:  # the buffer always holds exactly one block
+            self._before = self.rng.bit_generator.state
             self._buf = self.rng.random(self._block).tolist()
             i = 0
         self._i = i + 1
         return self._buf[i]
+
+    def state(self) -> dict:
+        """Where the stream stands, as JSON-able data (a checkpoint): the generator before the
+        current block and the draws taken from it; ``set_state`` continues with the very next draw."""
+        return {"generator": self._before, "block": self._block, "drawn": self._i}
+
+    def set_state(self, st: dict) -> None:
+        """Continue from ``state()``; raises ValueError for data that is not such a state."""
+        try:
+            block, drawn = int(st["block"]), int(st["drawn"])
+            if block != self._block or not 0 <= drawn <= block:
+                raise ValueError(f"block {block}, drawn {drawn}")
+            self.rng.bit_generator.state = st["generator"]
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ValueError(f"not a random-stream state ({exc})") from None
+        self._before = self.rng.bit_generator.state
+        if drawn < block:  # redraw the current block; the generator then stands after it again
+            self._buf = self.rng.random(block).tolist()
+        self._i = drawn
 
     def index(self, n: int) -> int:
         """A uniform index in range(n)."""

@@ -6,7 +6,7 @@ human expressed an intention, and whether the robot's action satisfied it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from collections import deque
 from typing import Sequence
 
 import numpy as np
@@ -14,18 +14,40 @@ import numpy as np
 INSECURE = 90.0  # Eq 4.7: secure iff every drive < 90
 
 
-@dataclass
 class MetricRecorder:
-    drive_names: Sequence[str]
-    thresholds: Sequence[float]
-    _drives: list = field(default_factory=list)
-    _expressed: list = field(default_factory=list)
-    _satisfied: list = field(default_factory=list)
+    """The metrics of a run, kept incrementally: O(1) per tick and fixed memory, so a run of any
+    length costs the same per tick (a node publishes them four times a second). Running sums in
+    tick order give bit for bit what ``summarize`` computes over the whole arrays (numpy sums a
+    column of a C-ordered array row by row). ``keep=True`` also keeps every tick (``series``)."""
+
+    def __init__(self, drive_names: Sequence[str], thresholds: Sequence[float], keep: bool = False):
+        self.drive_names = list(drive_names)
+        self.thresholds = [float(x) for x in thresholds]
+        self._n = self._n_int = self._n_sat = self._n_secure = 0
+        self._sum = [0.0] * len(self.drive_names)
+        self._excess = [0.0] * len(self.drive_names)
+        self._keep = keep
+        self._drives: list = []
+        self._expressed: list = []
+        self._satisfied: list = []
 
     def record(self, drives: Sequence[float], expressed: bool, satisfied: bool) -> None:
-        self._drives.extend(drives)
-        self._expressed.append(expressed)
-        self._satisfied.append(satisfied)
+        s, e, thr = self._sum, self._excess, self.thresholds
+        secure = True
+        for i, d in enumerate(drives):
+            s[i] += d
+            x = d - thr[i]
+            e[i] += x if x > 0.0 else 0.0
+            if not d < INSECURE:
+                secure = False
+        self._n += 1
+        self._n_secure += secure
+        self._n_int += bool(expressed)
+        self._n_sat += bool(satisfied)
+        if self._keep:
+            self._drives.extend(drives)
+            self._expressed.append(expressed)
+            self._satisfied.append(satisfied)
 
     def follow(self, perception, after_action: bool = False) -> "MetricRecorder":
         """Record from a robot's perception in ``on_tick`` (``robot.run_loop``'s hook): its drives after
@@ -36,20 +58,35 @@ class MetricRecorder:
     def on_tick(self, t, p, r, a, out) -> None:
         """``run_loop``'s hook: d(t) from the followed perception, the truth from the outcome."""
         per = self._perception
-        self._drives.extend(per.after_action if self._after_action else per.drives)
-        self._expressed.append(out.true_intention != 0)
-        self._satisfied.append(out.satisfied)
+        self.record(per.after_action if self._after_action else per.drives, out.true_intention != 0, out.satisfied)
 
     @property
     def n(self) -> int:
-        return len(self._expressed)
+        return self._n
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Every tick's record (only with ``keep=True``)."""
+        if not self._keep:
+            raise ValueError("this recorder keeps no per-tick history (MetricRecorder(keep=True))")
         d = np.asarray(self._drives, dtype=float).reshape(-1, len(self.drive_names))
         return d, np.asarray(self._expressed, dtype=bool), np.asarray(self._satisfied, dtype=bool)
 
     def summary(self) -> dict:
-        return summarize(*self.arrays(), self.drive_names, self.thresholds)
+        """``summarize`` of everything recorded, from the running sums."""
+        n = self._n
+        if n == 0:
+            raise ValueError("no iterations recorded")
+        names = self.drive_names
+        cda = np.array([x / n for x in self._sum])  # Eq 4.2
+        ceda = np.array([x / n for x in self._excess])  # Eq 4.4
+        n_int = self._n_int
+        hsr = float(self._n_sat / n_int) if n_int else float("nan")  # Eq 4.1
+        out_cda = {nm: float(v) for nm, v in zip(names, cda)}
+        out_cda["all"] = float(cda.mean())  # Eq 4.3
+        out_ceda = {nm: float(v) for nm, v in zip(names, ceda)}
+        out_ceda["all"] = float(ceda.mean())  # Eq 4.5
+        return {"HSR": hsr, "RSR": float(self._n_secure / n), "CDA": out_cda, "CEDA": out_ceda,
+                "intentions": n_int}
 
     def series(self) -> dict:
         return cumulative_series(*self.arrays(), self.drive_names, self.thresholds)
@@ -112,3 +149,27 @@ def accuracy_ends(hits: Sequence[bool], window: int = ACCURACY_WINDOW) -> dict:
 def accuracy_curve(hits: Sequence[bool], width: int = 250) -> list[float]:
     """Accuracy per consecutive window of ``width`` ticks (a shorter last window is dropped)."""
     return [sum(hits[i:i + width]) / width for i in range(0, len(hits) - width + 1, width)]
+
+
+class AccuracyEnds:
+    """``accuracy_ends`` kept in fixed memory: the first ``window`` hits and a ring of the last."""
+
+    def __init__(self, window: int = ACCURACY_WINDOW):
+        self.window = window
+        self.first: list[bool] = []
+        self.last: deque = deque(maxlen=window)
+
+    def append(self, hit: bool) -> None:
+        if len(self.first) < self.window:
+            self.first.append(hit)
+        self.last.append(hit)
+
+    def __len__(self) -> int:
+        return len(self.last)
+
+    def ends(self) -> dict:
+        if not self.last:
+            raise ValueError("no iterations recorded")
+        w = self.window
+        n = min(w, len(self.first))
+        return {f"first_{w}": sum(self.first[:n]) / n, f"last_{w}": sum(self.last) / len(self.last)}

@@ -15,7 +15,7 @@ from homeo_decision.scenario import Scenario
 from homeo_msgs_py.schemas import Rejected
 
 from .environment import SimEnvironment
-from .metrics import MetricRecorder, accuracy_ends
+from .metrics import AccuracyEnds, MetricRecorder
 
 
 class SimWorldSide:
@@ -33,7 +33,7 @@ class SimWorldSide:
     def reset(self, seed: int | None = None) -> None:
         self.env.reset(seed)
         self.rec = MetricRecorder(self.sc.drive_names, [d.threshold for d in self.sc.drives])
-        self.hits: list[bool] = []
+        self.hits = AccuracyEnds()  # fixed memory: the node runs for hours
         self._last: Outcome | None = None
 
     # -- WorldSide ---------------------------------------------------------------------------
@@ -77,5 +77,5 @@ class SimWorldSide:
             return {}
         m = self.rec.summary()
         if self.intention_accuracy and self.hits:
-            m["intention_accuracy"] = accuracy_ends(self.hits)
+            m["intention_accuracy"] = self.hits.ends()
         return {"metrics": m}
