@@ -2,7 +2,7 @@
 
 Publishes  homeo/drives (state), /diagnostics
 Subscribes homeo/world (state), homeo/intention (state), homeo/outcome (event)
-Parameters scenario, overrides (read-only)
+Parameters scenario, overrides, supervised (read-only; see ``durable``)
 
 Tick k joins the world and the recognised intention of tick k with the outcome of tick k-1
 (``homeo_msgs_py.graph``): the effects of k-1, the body of k, Eq 3.2-3.3 for the perceived world.
@@ -12,7 +12,10 @@ from __future__ import annotations
 
 import sys
 
+from rcl_interfaces.msg import ParameterDescriptor
+
 from homeo_msgs_py.graph import NODES
+from homeo_msgs_py.rejoin import make_rejoinable
 from homeo_msgs_py.schemas import Rejected
 
 from .hosts import PerceptionHost
@@ -26,6 +29,10 @@ class DrivesNode(ScenarioNode):
     def __init__(self):
         super().__init__(DESC.name)
         self.host = PerceptionHost(self.sc)
+        self.declare_parameter("supervised", False, ParameterDescriptor(
+            description="restarted nodes rejoin the run: skip a gap of ticks", read_only=True))
+        if self.get_parameter("supervised").value:
+            make_rejoinable(self.host.stage)  # an upstream node that died must not wedge this one
         self.pub = self.publisher("drives")
         for i in DESC.inputs:
             self.subscribe(i.topic, lambda m, key=i.topic: self._put(key, m))

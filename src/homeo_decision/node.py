@@ -8,7 +8,10 @@ Services   ~/save_q, ~/load_q (std_srvs/Trigger: the file in q_table_path),
            ~/reset (forget the Q-table and reseed)
 Parameters dod [0, 1] (Eq 3.27), xi >= 0 (Eq 3.20), gamma [0, 1] (Eq 3.14), feedback (use the
            user's feedback, Eq 3.21), pseudo_update (Eq 3.23), seed, q_table_path,
-           load_on_start; all but the last take effect on the next tick.
+           load_on_start; all but the last take effect on the next tick; and the checkpoint
+           parameters of ``durable`` (checkpoint_dir, checkpoint_every, resume_dir, respawned,
+           supervised): a checkpoint holds the Q-table, the random stream, the parameters and the
+           learned tick count, from which a resumed run's alpha/tau schedule goes on.
 
 Tick k needs only the drives of tick k, which carry the outcome of tick k-1 as the drives
 node took it in: learn from k-1, then choose for k. One input per tick keeps the decision off
@@ -26,7 +29,7 @@ from std_srvs.srv import Trigger
 from homeo_msgs_py.graph import NODES
 from homeo_msgs_py.node_base import NodeConfigError
 
-from . import qtable_io
+from . import checkpoint, durable, qtable_io
 from .agent import DecisionCore
 from .hosts import DecisionHost
 from .node_runtime import ScenarioNode, run_scenario_node
@@ -64,6 +67,14 @@ class DecisionNode(ScenarioNode):
             if not ok:
                 raise NodeConfigError(f"load_on_start: {msg}")
             self.get_logger().info(msg)
+        self.durable = durable.declare(self)
+        durable.setup_stage(self, self.host.stage, self.durable)
+        self.ticks = 0  # ticks learned in all (the tick offset included)
+        self._restore(durable.read_start(self, self.durable))
+        self.checkpoints = checkpoint.Checkpointer(
+            self.durable["checkpoint_dir"], DESC.name, self.durable["checkpoint_every"],
+            lambda: checkpoint.decision_checkpoint(self.core, self.ticks, max(0, self.host.stage.run)),
+            lambda text: self.get_logger().warning(text))
         self.add_on_set_parameters_callback(self._on_params)
 
         self.pub = self.publisher("action", min_subs=1)
@@ -91,10 +102,44 @@ class DecisionNode(ScenarioNode):
                 self.q_path = prm.value
         return SetParametersResult(successful=True)
 
+    def _restore(self, ck: dict | None) -> None:
+        """Start from a checkpoint: a respawned node keeps its run's offset and parameters, a
+        resumed run starts its schedule at the ticks learned."""
+        if ck is None:
+            return
+        where = str(checkpoint.path_for(self.durable["resume_dir"], DESC.name))
+        respawned = self.durable["respawned"]
+        try:
+            checkpoint.restore_decision(self.core, ck, where, params=respawned)
+        except checkpoint.CheckpointError as exc:
+            raise NodeConfigError(f"resume: {exc}") from None
+        self.core.set_tick_offset(ck["tick_offset"] if respawned else ck["ticks"])
+        self.ticks = ck["ticks"]
+        if respawned:  # the node's parameters show what the core uses
+            from rclpy.parameter import Parameter
+
+            c = self.core
+            self.set_parameters([Parameter(n, value=v) for n, v in (
+                ("dod", c.dod), ("xi", c.xi), ("gamma", c.gamma), ("feedback", c.use_feedback),
+                ("pseudo_update", c.pseudo))])
+        self.get_logger().info(
+            f"{'rejoined' if respawned else 'resumed'} from {where}: ticks {ck['ticks']}, tick offset "
+            f"{self.core.tick_offset}, learned state {checkpoint.digest(checkpoint.decision_learned(self.core))}")
+
     # -- ticks ----------------------------------------------------------------------------
     def _put(self, key, msg) -> None:
         for k, fields in self.host.stage.put(key, msg):
             self.send(self.pub, k, fields, self.host.stage.run)
+            self.ticks = self.core.tick_offset + k + (0 if fields.get("final") else 1)
+            self.checkpoints.after_tick(self.ticks)
+
+    def extra_statuses(self) -> list[dict]:
+        return [durable.status(DESC.name, self.checkpoints, self.ticks, getattr(self.host.stage.join, "skipped", 0))]
+
+    def destroy_node(self):
+        if self.ticks > 0 and self.checkpoints.last_ticks != self.ticks:
+            self.checkpoints.save()  # at shutdown (Ctrl-C, SIGTERM, the launcher's stop)
+        return super().destroy_node()
 
     # -- services -------------------------------------------------------------------------
     def _load(self) -> tuple[bool, str]:

@@ -43,7 +43,7 @@ class UniformStream:
     def state(self) -> dict:
         """Where the stream stands, as JSON-able data (a checkpoint): the generator before the
         current block and the draws taken from it; ``set_state`` continues with the very next draw."""
-        return {"generator": self._before, "block": self._block, "drawn": self._i}
+        return {"generator": self._before, "block": self._block, "drawn": self._i if self._buf else 0}
 
     def set_state(self, st: dict) -> None:
         """Continue from ``state()``; raises ValueError for data that is not such a state."""
@@ -55,8 +55,7 @@ class UniformStream:
         except (KeyError, TypeError, ValueError) as exc:
             raise ValueError(f"not a random-stream state ({exc})") from None
         self._before = self.rng.bit_generator.state
-        if drawn < block:  # redraw the current block; the generator then stands after it again
-            self._buf = self.rng.random(block).tolist()
+        self._buf = self.rng.random(block).tolist()  # the current block again; the generator after it
         self._i = drawn
 
     def index(self, n: int) -> int:

@@ -6,7 +6,9 @@ Subscribes homeo/observation (event: gesture, movement, keyword; and the true in
            clarification reveals the intention, and the network learns by EM)
 Services   ~/save_model, ~/load_model (std_srvs/Trigger: the file in model_path; bayes mode)
 Parameters mode ('bayes': the Bayesian network of Section 2.3; 'oracle': the thesis's simulation,
-           intention observed directly), model_path, load_on_start, scenario, overrides (read-only)
+           intention observed directly), model_path, load_on_start, scenario, overrides (read-only),
+           and the checkpoint parameters of ``homeo_decision.durable`` (bayes mode: the model and
+           the ticks learned; the oracle learns nothing and writes none)
 
 Tick k needs the observation of tick k and, in bayes mode, the outcome of tick k-1, so the
 model has learned from k-1 before it recognises k, as in the in-process runner.
@@ -20,11 +22,13 @@ from pathlib import Path
 from rcl_interfaces.msg import ParameterDescriptor
 from std_srvs.srv import Trigger
 
+from homeo_decision import checkpoint, durable
 from homeo_decision.node_runtime import ScenarioNode, run_scenario_node
 from homeo_msgs_py.graph import BAYES, INTENTION_MODES, NODES
 from homeo_msgs_py.node_base import NodeConfigError
 from homeo_msgs_py.schemas import Rejected
 
+from .checkpoint import intention_checkpoint, intention_learned, restore_intention
 from .recognition import RecognitionHost
 
 DESC = NODES["homeo_intention"]
@@ -48,6 +52,16 @@ class IntentionNode(ScenarioNode):
             ok, msg = self._load()
             if not ok:
                 raise NodeConfigError(f"load_on_start: {msg}")
+        self.durable = durable.declare(self)
+        durable.setup_stage(self, self.host.stage, self.durable)
+        self.ticks = self.tick_offset = 0
+        if self.part.learns:
+            self._restore(durable.read_start(self, self.durable))
+        self.checkpoints = checkpoint.Checkpointer(
+            self.durable["checkpoint_dir"] if self.part.learns else "", DESC.name, self.durable["checkpoint_every"],
+            lambda: intention_checkpoint(self.part.model, self.ticks, self.tick_offset, max(0, self.host.stage.run),
+                                         mode),
+            lambda text: self.get_logger().warning(text))
         self.pub = self.publisher("intention")
         for i in DESC.reads(self.part.learns):
             self.subscribe(i.topic, lambda m, key=i.topic: self._put(key, m))
@@ -62,6 +76,31 @@ class IntentionNode(ScenarioNode):
                 raise Rejected(str(exc)) from None
         for k, fields in self.host.stage.put(key, msg):
             self.send(self.pub, k, fields, self.host.stage.run)
+            self.ticks = self.tick_offset + k + 1
+            self.checkpoints.after_tick(self.ticks)
+
+    def _restore(self, ck: dict | None) -> None:
+        if ck is None:
+            return
+        where = str(checkpoint.path_for(self.durable["resume_dir"], DESC.name))
+        respawned = self.durable["respawned"]
+        try:
+            restore_intention(self.part.model, ck, self.host.mode, where)
+        except checkpoint.CheckpointError as exc:
+            raise NodeConfigError(f"resume: {exc}") from None
+        self.tick_offset = ck["tick_offset"] if respawned else ck["ticks"]
+        self.ticks = ck["ticks"]
+        self.get_logger().info(
+            f"{'rejoined' if respawned else 'resumed'} from {where}: ticks {ck['ticks']}, tick offset "
+            f"{self.tick_offset}, learned state {checkpoint.digest(intention_learned(self.part.model))}")
+
+    def extra_statuses(self) -> list[dict]:
+        return [durable.status(DESC.name, self.checkpoints, self.ticks, getattr(self.host.stage.join, "skipped", 0))]
+
+    def destroy_node(self):
+        if self.ticks > 0 and self.checkpoints.last_ticks != self.ticks:
+            self.checkpoints.save()  # at shutdown (Ctrl-C, SIGTERM, the launcher's stop)
+        return super().destroy_node()
 
     # -- services -------------------------------------------------------------------------
     def _path(self) -> str:

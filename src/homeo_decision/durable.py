@@ -1,0 +1,69 @@
+"""What the robot nodes share to survive crashes and restarts (``homeo_decision.checkpoint`` does
+the files): the parameters, the start from a checkpoint, and the rejoining join.
+
+Parameters (read-only):
+  supervised        the launcher restarts nodes that die: a gap in the ticks is skipped, not
+                    waited for (``homeo_msgs_py.rejoin``)
+  checkpoint_dir    write DIR/<node>.json every checkpoint_every ticks and at shutdown ('' = never)
+  checkpoint_every  ticks between checkpoints (default 100)
+  resume_dir        start from DIR/<node>.json ('' = from scratch)
+  respawned         this process replaces one that died in the same run: go on with the run's tick
+                    offset and parameters, and start fresh if no checkpoint was written yet
+"""
+
+from __future__ import annotations
+
+import os
+
+from rcl_interfaces.msg import IntegerRange, ParameterDescriptor
+
+from homeo_msgs_py.node_base import NodeConfigError
+from homeo_msgs_py.rejoin import make_rejoinable
+
+from . import checkpoint
+
+DEFAULT_EVERY = 100
+
+
+def declare(node) -> dict:
+    """Declare the parameters; returns their values."""
+    ro = lambda text: ParameterDescriptor(description=text, read_only=True)  # noqa: E731
+    node.declare_parameter("supervised", False, ro("restarted nodes rejoin the run: skip a gap of ticks"))
+    node.declare_parameter("checkpoint_dir", "", ro("write the learned state here ('' = never)"))
+    node.declare_parameter("checkpoint_every", DEFAULT_EVERY, ParameterDescriptor(
+        description="ticks between checkpoints", read_only=True,
+        integer_range=[IntegerRange(from_value=1, to_value=10**9, step=1)]))
+    node.declare_parameter("resume_dir", "", ro("start from the checkpoint in this folder ('' = from scratch)"))
+    node.declare_parameter("respawned", False, ro("replaces a node of this run that died"))
+    return {n: node.get_parameter(n).value for n in ("supervised", "checkpoint_dir", "checkpoint_every",
+                                                    "resume_dir", "respawned")}
+
+
+def setup_stage(node, stage, cfg: dict) -> None:
+    if cfg["supervised"] or cfg["respawned"]:
+        make_rejoinable(stage)
+
+
+def read_start(node, cfg: dict) -> dict | None:
+    """The checkpoint to start from (checked envelope), or None. A respawned node without one
+    starts fresh; a resume without one is a configuration error."""
+    d = cfg["resume_dir"]
+    if not d:
+        return None
+    path = checkpoint.path_for(d, node.get_name())
+    if cfg["respawned"] and not os.path.exists(path):
+        node.get_logger().warning(f"no checkpoint {path} yet: starting fresh")
+        return None
+    try:
+        return checkpoint.load(path, node.get_name())
+    except checkpoint.CheckpointError as exc:
+        raise NodeConfigError(f"resume: {exc}") from None
+
+
+def status(name: str, ck: checkpoint.Checkpointer, ticks: int, skipped: int) -> dict:
+    """The node's checkpoint and rejoin health as a DiagnosticStatus dict."""
+    level = 1 if ck.failed else 0
+    return {"level": level, "name": f"{name}: checkpoints", "hardware_id": name,
+            "message": ck.last_error or (f"last at tick {ck.last_ticks}" if ck.saved else "none written yet"),
+            "values": {"learned_ticks": str(ticks), "written": str(ck.saved), "failed": str(ck.failed),
+                       "path": str(ck.path or ""), "skipped_ticks": str(skipped)}}
