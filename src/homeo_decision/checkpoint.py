@@ -5,11 +5,12 @@ One file per node, ``DIR/<node>.json``, written atomically (``jsonfile.write_ato
 leaves the previous checkpoint or the new one, never half a file). The envelope:
 
     {"schema": "homeo-checkpoint", "version": 1, "node": NAME, "ticks": T, "tick_offset": O,
-     "run": R, "params": {...}, "rng": {...} | null, "state": {...}}
+     "run": R, "session": S, "params": {...}, "rng": {...} | null, "state": {...}}
 
 ``ticks``: how many ticks the node has learned in all (a resumed run's schedule starts there);
 ``tick_offset``: the ticks learned before the current run (a node restarted within the run goes on
-with the same offset); ``state``: the decision's Q-table (``qtable_io``) or the intention model
+with the same offset); ``session``: the launch that wrote it (a restarted node takes only its own
+launch's checkpoint, never a stale one of an earlier run); ``state``: the decision's Q-table (``qtable_io``) or the intention model
 (``homeo_intention.model_io``). Loading checks everything before it changes anything.
 """
 
@@ -36,9 +37,10 @@ def path_for(directory: str | Path, node: str) -> Path:
     return Path(directory) / f"{node}.json"
 
 
-def envelope(node: str, ticks: int, tick_offset: int, run: int, params: dict, rng, state: dict) -> dict:
+def envelope(node: str, ticks: int, tick_offset: int, run: int, params: dict, rng, state: dict,
+             session: str = "") -> dict:
     return {"schema": SCHEMA, "version": VERSION, "node": node, "ticks": int(ticks), "tick_offset": int(tick_offset),
-            "run": int(run), "params": params, "rng": rng, "state": state}
+            "run": int(run), "session": session, "params": params, "rng": rng, "state": state}
 
 
 def save(path: str | Path, ck: dict) -> None:
@@ -73,11 +75,11 @@ def digest(obj) -> str:
 
 
 # -- the decision node ------------------------------------------------------------------------------
-def decision_checkpoint(core, ticks: int, run: int) -> dict:
+def decision_checkpoint(core, ticks: int, run: int, session: str = "") -> dict:
     params = {"dod": core.dod, "xi": core.xi, "gamma": core.gamma, "pseudo_update": core.pseudo,
               "feedback": core.use_feedback, "seed": core.seed}
     return envelope("homeo_decision", ticks, core.tick_offset, run, params, core.rng.state(),
-                    qtable_io.to_dict(core.q))
+                    qtable_io.to_dict(core.q), session)
 
 
 def decision_learned(core) -> dict:

@@ -8,7 +8,8 @@ Parameters (read-only):
   checkpoint_every  ticks between checkpoints (default 100)
   resume_dir        start from DIR/<node>.json ('' = from scratch)
   respawned         this process replaces one that died in the same run: go on with the run's tick
-                    offset and parameters, and start fresh if no checkpoint was written yet
+                    offset and parameters, and start fresh if no checkpoint of this launch exists
+  session           the launch's id, written into each checkpoint
 """
 
 from __future__ import annotations
@@ -35,8 +36,9 @@ def declare(node) -> dict:
         integer_range=[IntegerRange(from_value=1, to_value=10**9, step=1)]))
     node.declare_parameter("resume_dir", "", ro("start from the checkpoint in this folder ('' = from scratch)"))
     node.declare_parameter("respawned", False, ro("replaces a node of this run that died"))
+    node.declare_parameter("session", "", ro("the launch's id, written into each checkpoint"))
     return {n: node.get_parameter(n).value for n in ("supervised", "checkpoint_dir", "checkpoint_every",
-                                                    "resume_dir", "respawned")}
+                                                    "resume_dir", "respawned", "session")}
 
 
 def setup_stage(node, stage, cfg: dict) -> None:
@@ -55,9 +57,13 @@ def read_start(node, cfg: dict) -> dict | None:
         node.get_logger().warning(f"no checkpoint {path} yet: starting fresh")
         return None
     try:
-        return checkpoint.load(path, node.get_name())
+        ck = checkpoint.load(path, node.get_name())
     except checkpoint.CheckpointError as exc:
         raise NodeConfigError(f"resume: {exc}") from None
+    if cfg["respawned"] and ck.get("session") != cfg["session"]:
+        node.get_logger().warning(f"{path} is of an earlier launch: starting fresh")
+        return None
+    return ck
 
 
 def status(name: str, ck: checkpoint.Checkpointer, ticks: int, skipped: int) -> dict:

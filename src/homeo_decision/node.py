@@ -73,7 +73,8 @@ class DecisionNode(ScenarioNode):
         self._restore(durable.read_start(self, self.durable))
         self.checkpoints = checkpoint.Checkpointer(
             self.durable["checkpoint_dir"], DESC.name, self.durable["checkpoint_every"],
-            lambda: checkpoint.decision_checkpoint(self.core, self.ticks, max(0, self.host.stage.run)),
+            lambda: checkpoint.decision_checkpoint(self.core, self.ticks, max(0, self.host.stage.run),
+                                                  self.durable["session"]),
             lambda text: self.get_logger().warning(text))
         self.add_on_set_parameters_callback(self._on_params)
 

@@ -11,9 +11,9 @@ from . import model_io
 NODE = "homeo_intention"
 
 
-def intention_checkpoint(model, ticks: int, tick_offset: int, run: int, mode: str) -> dict:
+def intention_checkpoint(model, ticks: int, tick_offset: int, run: int, mode: str, session: str = "") -> dict:
     params = {"mode": mode, "threshold": model.threshold, "prior_strength": model.strength}
-    return envelope(NODE, ticks, tick_offset, run, params, None, model_io.to_dict(model))
+    return envelope(NODE, ticks, tick_offset, run, params, None, model_io.to_dict(model), session)
 
 
 def intention_learned(model) -> dict:

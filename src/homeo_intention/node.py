@@ -60,7 +60,7 @@ class IntentionNode(ScenarioNode):
         self.checkpoints = checkpoint.Checkpointer(
             self.durable["checkpoint_dir"] if self.part.learns else "", DESC.name, self.durable["checkpoint_every"],
             lambda: intention_checkpoint(self.part.model, self.ticks, self.tick_offset, max(0, self.host.stage.run),
-                                         mode),
+                                         mode, self.durable["session"]),
             lambda text: self.get_logger().warning(text))
         self.pub = self.publisher("intention")
         for i in DESC.reads(self.part.learns):

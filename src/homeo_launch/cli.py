@@ -10,6 +10,7 @@ from homeo_decision.scenario import ScenarioError
 from homeo_msgs_py.cli_args import Parser, UserError, float_in, int_at_least, run_command, setting
 from homeo_msgs_py.graph import BAYES, INTENTION_MODES
 
+from .durable_args import add_durable_options
 from .live_args import add_live_options
 from .monitor import GraphError
 from .sim import PROG, cmd_sim
@@ -46,6 +47,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--json", action="store_true", help="print the metrics as homeo-sim run --json does")
     s.add_argument("--quiet", action="store_true", help="no progress bar")
     add_live_options(s)
+    add_durable_options(s, "sim")
     from .pepper import add_parser as add_pepper
 
     add_pepper(sub)
@@ -66,6 +68,7 @@ def main(argv=None) -> int:
     import signal
 
     signal.signal(signal.SIGTERM, _sigterm_as_interrupt)
+    signal.signal(signal.SIGHUP, _sigterm_as_interrupt)  # a closed terminal: stop, save and clean up too
     # Ctrl-C however the launcher was started: a script's background job inherits SIGINT ignored
     signal.signal(signal.SIGINT, signal.default_int_handler)
     def command() -> int:

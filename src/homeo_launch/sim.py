@@ -27,6 +27,7 @@ from homeo_sim.stats import json_safe
 
 from .monitor import DISCOVERY_TIMEOUT_S, GraphError, Monitor, check_alive, wait_until_up
 from .processes import Graph, NodeSpec, dds_defaults, graph_env
+from .supervise import Supervisor
 
 PROG = "homeo-launch"
 INTERRUPT_STATUS_S = 2.0  # on Ctrl-C, how long to wait for the run's status when none came yet
@@ -50,6 +51,11 @@ class SimOptions:
     human: str = "sim"  # or "person": a person on homeo/human_input plays the human
     human_timeout: float = 10.0  # seconds a tick waits for the person
     extra_readers: int = 0  # the launcher's tap (a recorder, a live view): the run waits for it
+    checkpoint_dir: str = ""  # '' = no checkpoints (restarted nodes then start fresh)
+    checkpoint_every: int = 100
+    resume: str | None = None  # a checkpoint folder to start the robot nodes from
+    max_restarts: int = 3  # per robot node; 0 = a node that dies stops the graph
+    session: str = ""  # this launch's id, in every checkpoint (a restarted node takes only its own)
 
 
 def sim_specs(o: SimOptions) -> list[NodeSpec]:
@@ -71,7 +77,24 @@ def sim_specs(o: SimOptions) -> list[NodeSpec]:
                human_timeout=float(o.human_timeout))
     params = {"homeo_sim": sim, "homeo_intention": dict(common, mode=o.intention), "homeo_drives": dict(common),
               "homeo_decision": decision}
+    durable_params(o, params)
     return [NodeSpec(n, NODES[n].module, params[n]) for n in GRAPHS["sim"]]
+
+
+def durable_params(o, params: dict) -> None:
+    """Checkpoints and supervision (``homeo_decision.durable``) for the robot nodes of ``params``."""
+    for n in ("homeo_intention", "homeo_drives", "homeo_decision"):
+        if n in params and o.max_restarts > 0:
+            params[n]["supervised"] = True
+    for n in ("homeo_intention", "homeo_decision"):
+        if n not in params:
+            continue
+        p = params[n]
+        if o.checkpoint_dir:
+            p.update(checkpoint_dir=os.path.abspath(o.checkpoint_dir), checkpoint_every=int(o.checkpoint_every),
+                     session=o.session)
+        if o.resume:
+            p["resume_dir"] = os.path.abspath(o.resume)
 
 
 def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on_progress=None,
@@ -84,10 +107,14 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
     os.environ.update(dds_defaults())  # the launcher's own node too
     if sinks:
         o = replace(o, extra_readers=1)
+    if o.checkpoint_dir and not o.session:
+        o = replace(o, session=new_session())
     graph = Graph(sim_specs(o), env, log_dir)
-    mon = tap = None
+    mon = tap = sup = None
     try:
         mon = Monitor()
+        sup = Supervisor(graph, mon.node, o.max_restarts, os.path.abspath(o.checkpoint_dir) if o.checkpoint_dir else "",
+                         log=(lambda text: None) if quiet else None)
         if sinks:
             from .tap import Tap
 
@@ -102,7 +129,7 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
         last_tick = -1
         while True:
             mon.spin(0.05)
-            check_alive(graph)
+            sup.check()  # a robot node that died is restarted (bounded), the world node's death is fatal
             st = mon.status
             if st is None:
                 continue
@@ -121,16 +148,21 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
         out = dict(mon.status.fields)
         out["elapsed_s"] = (out.get("extra") or {}).get("elapsed_s", time.monotonic() - t_start)
         out["rss_mb"] = graph.rss_mb()
+        if sup.restarts:
+            out["restarts"] = dict(sup.restarts)
         if o.save_q:
-            ok, msg = True, ""
-            if o.load_q and o.save_q != o.load_q:
-                ok, msg = _set_param(mon, "/homeo_decision", "q_table_path", os.path.abspath(o.save_q))
-            if ok:
-                ok, msg = mon.call_trigger("/homeo_decision/save_q")
+            ok, msg = save_q(mon, o)
             if not ok:
                 raise GraphError(f"saving the Q-table failed: {msg}")
         return out
     except KeyboardInterrupt:
+        if last is not None and sup is not None and sup.restarts:
+            last["restarts"] = dict(sup.restarts)
+        if mon is not None and o.save_q:  # what the user asked for, before the nodes stop
+            ok, msg = save_q(mon, o)
+            if not quiet or not ok:
+                print(f"{PROG}: " + (f"saved the Q-table {o.save_q}" if ok else f"warning: the Q-table was not saved: "
+                                     f"{msg}"), file=sys.stderr)
         # the run so far: the status is latched, so a launcher whose node has not heard it yet gets it now
         if mon is not None and last is not None and not last.get("metrics"):
             end = time.monotonic() + INTERRUPT_STATUS_S
@@ -180,6 +212,22 @@ def drain(mon: Monitor, tap, bound: float = 2.0) -> None:
             return
 
 
+def new_session() -> str:
+    import uuid
+
+    return uuid.uuid4().hex[:12]
+
+
+def save_q(mon: Monitor, o) -> tuple[bool, str]:
+    """Ask the decision node to save its table to ``--save-q`` (also on Ctrl-C)."""
+    ok, msg = True, ""
+    if o.load_q and o.save_q != o.load_q:
+        ok, msg = _set_param(mon, "/homeo_decision", "q_table_path", os.path.abspath(o.save_q))
+    if ok:
+        ok, msg = mon.call_trigger("/homeo_decision/save_q", timeout=5.0)
+    return ok, msg
+
+
 def _set_param(mon: Monitor, node: str, name: str, value) -> tuple[bool, str]:
     from rcl_interfaces.srv import SetParameters
     from rclpy.parameter import Parameter
@@ -213,11 +261,14 @@ def options_from_args(a) -> SimOptions:
         from .record import check_new_bag
 
         check_new_bag(a.record)
-    load_scenario(a.scenario, overrides=dict(a.set))  # a bad scenario is a one-line error here, not in four nodes
+    sc = load_scenario(a.scenario, overrides=dict(a.set))  # a bad scenario is a one-line error here, not in four nodes
+    from .durable_args import durable_options
+
     return SimOptions(iterations=a.iterations, rate=a.rate, seed=a.seed, dod=a.dod, xi=a.xi,
                       pseudo_update=False if a.no_pseudo else None, scenario=a.scenario, overrides=tuple(a.set),
                       load_q=a.load_q, save_q=a.save_q, trace=a.trace, action_timeout=a.action_timeout,
-                      intention=a.intention, human=a.human, human_timeout=a.human_timeout)
+                      intention=a.intention, human=a.human, human_timeout=a.human_timeout,
+                      **durable_options(a, "sim", sc, a.intention == BAYES))
 
 
 def open_sinks(a, graph: str, iterations: int, seed: int, sc, overrides, **extra) -> list:
@@ -288,6 +339,9 @@ def cmd_sim(a) -> int:
     else:
         code = 0
     out = run_output(o.iterations, [o.seed], [status["metrics"]], sc.drive_names)
+    restarts = status.get("restarts")
+    if restarts:  # only when there were any: an undisturbed run prints what homeo-sim run prints
+        out["restarts"] = restarts
     if a.json:
         print(json.dumps(json_safe(out)))
     else:
@@ -295,6 +349,8 @@ def cmd_sim(a) -> int:
         print(f"graph: {status['elapsed_s']:.1f} s for {o.iterations} ticks "
               f"({status['elapsed_s'] / max(1, o.iterations) * 1e3:.2f} ms/tick), {status['missed']} missed, "
               f"{status['rss_mb']:.0f} MiB resident")
+        if restarts:
+            print("restarts: " + ", ".join(f"{n} {k}" for n, k in sorted(restarts.items())))
     return code
 
 

@@ -1,0 +1,166 @@
+"""Learning that survives: real node processes over DDS, killed with SIGKILL mid-run and restarted
+by the launcher from their last checkpoint; resume of a stopped run; Ctrl-C saves what was asked."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from rosgraph import fresh_domain
+
+from homeo_decision import checkpoint
+from homeo_decision.agent import DecisionCore
+from homeo_decision.scenario import load_scenario
+from homeo_launch.processes import graph_env
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+
+MODULES = {"homeo_decision": "homeo_decision.node", "homeo_intention": "homeo_intention.node"}
+
+
+def _launch(*args, domain: int) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "homeo_launch.cli", "sim", "--quiet", *args],
+                            env=graph_env(domain), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def _child(parent: int, module: str) -> int | None:
+    """The pid of the launcher's child running ``python -m module``."""
+    for d in Path("/proc").iterdir():
+        if not d.name.isdigit():
+            continue
+        try:
+            ppid = int((d / "stat").read_text().rsplit(")", 1)[1].split()[1])
+            cmd = (d / "cmdline").read_bytes().split(b"\0")
+        except (OSError, IndexError, ValueError):
+            continue
+        if ppid == parent and module.encode() in cmd:
+            return int(d.name)
+    return None
+
+
+def _wait_ticks(path: Path, ticks: int, proc: subprocess.Popen, bound: float = 120.0) -> None:
+    end = time.monotonic() + bound
+    while time.monotonic() < end:
+        assert proc.poll() is None, proc.communicate()[1][-2000:]
+        try:
+            if json.loads(path.read_text())["ticks"] >= ticks:
+                return
+        except (OSError, ValueError, KeyError):
+            pass
+        time.sleep(0.1)
+    raise AssertionError(f"{path} never reached {ticks} ticks")
+
+
+def _learned_digest(node: str, ck: dict) -> str:
+    sc = load_scenario()
+    if node == "homeo_decision":
+        core = DecisionCore(sc, 0)
+        checkpoint.restore_decision(core, ck, params=True)
+        return checkpoint.digest(checkpoint.decision_learned(core))
+    from homeo_intention.checkpoint import intention_learned, restore_intention
+    from homeo_intention.model import IntentionModel
+
+    m = IntentionModel(sc)
+    restore_intention(m, ck, "bayes")
+    return checkpoint.digest(intention_learned(m))
+
+
+@pytest.mark.parametrize("node", ["homeo_decision", "homeo_intention"])
+def test_a_node_killed_mid_run_is_restarted_from_its_checkpoint_and_the_run_completes(tmp_path, node):
+    ck_dir, logs = tmp_path / "ck", tmp_path / "logs"
+    n = 500
+    p = _launch("--iterations", str(n), "--rate", "50", "--action-timeout", "1", "--checkpoint-dir", str(ck_dir),
+                "--checkpoint-every", "50", "--log-dir", str(logs), "--json", domain=fresh_domain())
+    try:
+        path = ck_dir / f"{node}.json"
+        _wait_ticks(path, 100, p)
+        pid = _child(p.pid, MODULES[node])
+        assert pid is not None
+        os.kill(pid, signal.SIGKILL)
+        while Path(f"/proc/{pid}").exists() and _child(p.pid, MODULES[node]) == pid:
+            time.sleep(0.01)
+        last = json.loads(path.read_text())  # the last checkpoint the killed process wrote
+        out, err = p.communicate(timeout=240)
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.communicate()
+    assert p.returncode == 0, err[-3000:]
+    res = json.loads(out)
+    assert res["restarts"] == {node: 1}
+    assert res["metrics"]["HSR"]["per_seed"] and res["iterations"] == n
+    assert f"node {node} exited with code -9; restarting it" not in err  # --quiet: no chatter
+    # the new process loaded exactly the last checkpoint: its learned state has the file's digest
+    log = (logs / f"{node}.log").read_text()
+    m = re.search(r"rejoined from .*: ticks (\d+), tick offset (\d+), learned state ([0-9a-f]+)", log)
+    assert m, log[-2000:]
+    assert int(m.group(1)) == last["ticks"] and int(m.group(2)) == 0
+    assert m.group(3) == _learned_digest(node, last)
+    assert (logs / f"{node}.1.log").exists()  # the dead process's log is kept
+    final = json.loads(path.read_text())  # written at the end by the new process, same run
+    assert final["ticks"] >= n and final["tick_offset"] == 0 and final["session"] == last["session"]
+    assert not list(ck_dir.glob("*.tmp"))
+
+
+def test_a_node_that_keeps_dying_stops_the_graph_with_one_line(tmp_path):
+    p = _launch("--iterations", "0", "--rate", "50", "--checkpoint-dir", str(tmp_path / "ck"), "--max-restarts", "1",
+                domain=fresh_domain())
+    try:
+        end = time.monotonic() + 120
+        killed = 0
+        while killed < 2 and time.monotonic() < end:
+            pid = _child(p.pid, MODULES["homeo_decision"])
+            if pid is not None and (tmp_path / "ck").exists():
+                os.kill(pid, signal.SIGKILL)
+                killed += 1
+                while _child(p.pid, MODULES["homeo_decision"]) == pid:
+                    time.sleep(0.01)
+            time.sleep(0.2)
+        out, err = p.communicate(timeout=60)
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.communicate()
+    assert p.returncode == 1
+    lines = [ln for ln in err.splitlines() if "homeo_decision died" in ln]
+    assert lines == ["homeo-launch: error: node homeo_decision died 2 times (last exit code -9); stopping the graph"], err
+
+
+def test_resume_continues_the_schedule_and_ctrl_c_saves_q(tmp_path):
+    d = fresh_domain()
+    ck = tmp_path / "ck"
+    r = subprocess.run([sys.executable, "-m", "homeo_launch.cli", "sim", "--quiet", "--json", "--iterations", "300",
+                        "--checkpoint-dir", str(ck)], env=graph_env(d), capture_output=True, text=True, timeout=240)
+    assert r.returncode == 0, r.stderr[-2000:]
+    first = json.loads((ck / "homeo_decision.json").read_text())
+    assert first["ticks"] == 300 and first["tick_offset"] == 0
+    # resume into the same folder, until Ctrl-C; --save-q is honoured on the interrupt
+    q = tmp_path / "q.json"
+    p = _launch("--iterations", "0", "--rate", "100", "--resume", str(ck), "--save-q", str(q), domain=d)
+    try:
+        _wait_ticks(ck / "homeo_decision.json", 400, p)
+        p.send_signal(signal.SIGINT)
+        out, err = p.communicate(timeout=60)
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.communicate()
+    assert p.returncode == 0, err[-2000:]  # an unbounded run ends with Ctrl-C
+    assert "HSR" in out and q.exists()
+    after = json.loads((ck / "homeo_decision.json").read_text())
+    assert after["tick_offset"] == 300 and after["ticks"] > 400  # the final checkpoint, at shutdown
+    assert not list(tmp_path.rglob("*.tmp"))
+    bad = tmp_path / "bad"
+    bad.mkdir()
+    (bad / "homeo_decision.json").write_text("{")
+    r = subprocess.run([sys.executable, "-m", "homeo_launch.cli", "sim", "--resume", str(bad)], env=graph_env(d),
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and "corrupt checkpoint" in r.stderr, r.stderr
