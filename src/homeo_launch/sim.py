@@ -28,6 +28,7 @@ from homeo_sim.stats import json_safe
 from .monitor import DISCOVERY_TIMEOUT_S, GraphError, Monitor, check_alive, wait_until_up
 from .processes import Graph, NodeSpec, dds_defaults, graph_env
 from .supervise import Supervisor
+from .supervise import wait_until_up as supervised_wait
 
 PROG = "homeo-launch"
 INTERRUPT_STATUS_S = 2.0  # on Ctrl-C, how long to wait for the run's status when none came yet
@@ -124,7 +125,7 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
                     s.attach(mon.node)
             start_robot_first(graph, mon, tap, discovery_timeout)
         graph.start()
-        wait_until_up(graph, mon, GRAPHS["sim"], endpoints("sim", o.intention == BAYES), discovery_timeout)
+        supervised_wait(graph, mon, sup, GRAPHS["sim"], endpoints("sim", o.intention == BAYES), discovery_timeout)
         t_start = None
         last_tick = -1
         while True:

@@ -18,6 +18,7 @@ from .processes import Graph
 
 BACKOFF_S = (0.5, 1.0, 2.0, 4.0)  # before the 1st, 2nd, 3rd, ... restart of a node
 MAX_RESTARTS = 3
+CONFIG_ERROR = 2  # a node's exit code for a bad start-up configuration (node_base.run_node)
 DIAG_PERIOD_S = 1.0
 
 
@@ -50,7 +51,7 @@ class Supervisor:
             if code is None:
                 continue
             n = self.restarts.get(name, 0)
-            if not self.respawnable(name):
+            if not self.respawnable(name) or code == CONFIG_ERROR:  # a bad configuration stays bad
                 tail = g.log_tail(name)
                 raise GraphError(f"node {name} exited with code {code}" + (f"; its last output:\n{tail}" if tail else ""))
             if n >= self.max_restarts:
@@ -99,3 +100,17 @@ def _keep_log(g: Graph, name: str, n: int) -> None:
         os.replace(src, g.log_dir / f"{name}.{n}.log")
     except OSError:
         pass
+
+
+def wait_until_up(graph: Graph, mon, sup: Supervisor, nodes, endpoints, bound: float) -> None:
+    """``monitor.wait_until_up`` with supervision: the run may start (the world node decides) while
+    the launcher is still discovering, and a node that dies then is restarted as later."""
+    end = time.monotonic() + bound
+    while True:
+        sup.check()
+        missing = mon.missing(nodes, endpoints)
+        if not missing:
+            return
+        if time.monotonic() > end:
+            raise GraphError(f"the graph did not come up within {bound:g} s; missing: {'; '.join(missing)}")
+        mon.spin(0.1)
