@@ -57,6 +57,9 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--record", action="store_true",
                    help="also time the graph recording a bag, and print the ratio with / without recording")
     b.add_argument("--json", action="store_true")
+    from .soak import add_parser as add_soak
+
+    add_soak(sub)
     return ap
 
 
@@ -79,6 +82,10 @@ def main(argv=None) -> int:
             from .pepper import cmd_pepper
 
             return cmd_pepper(args)
+        if args.cmd == "soak":
+            from .soak import cmd_soak
+
+            return cmd_soak(args)
         from .bench import cmd_bench
 
         return cmd_bench(args)

@@ -99,11 +99,13 @@ def durable_params(o, params: dict) -> None:
 
 
 def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on_progress=None,
-              discovery_timeout: float = DISCOVERY_TIMEOUT_S, last: dict | None = None, sinks=()) -> dict:
+              discovery_timeout: float = DISCOVERY_TIMEOUT_S, last: dict | None = None, sinks=(),
+              on_start=None) -> dict:
     """Run the simulated graph to the end; returns the last run status fields (metrics included)
     plus ``elapsed_s`` (first tick to done) and ``rss_mb``. Raises GraphError or KeyboardInterrupt.
     ``sinks`` (a bag, a live view) get every message of the run from the launcher's tap
-    (``tap.py``); the simulation waits for the tap's subscriptions before tick 0."""
+    (``tap.py``); the simulation waits for the tap's subscriptions before tick 0. ``on_start(graph)``
+    is called once every node is up (the soak benchmark watches their processes)."""
     env = graph_env()
     os.environ.update(dds_defaults())  # the launcher's own node too
     if sinks:
@@ -126,6 +128,8 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
             start_robot_first(graph, mon, tap, discovery_timeout)
         graph.start()
         supervised_wait(graph, mon, sup, GRAPHS["sim"], endpoints("sim", o.intention == BAYES), discovery_timeout)
+        if on_start is not None:
+            on_start(graph)
         t_start = None
         last_tick = -1
         while True:

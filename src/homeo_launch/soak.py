@@ -1,0 +1,189 @@
+"""``homeo-launch soak``: is a long run as cheap per tick, and as small, at its end as at its start?
+
+Two parts, each optional:
+- in-process: ``--iterations`` ticks (default 1,000,000) of the thesis simulation
+  (``homeo_sim.runner.Simulation``, oracle recognition) in this process;
+- the graph: ``--ticks`` ticks (default 200,000) of ``homeo-launch sim`` (Bayesian recognition,
+  checkpoints every 100 ticks into a temporary folder), every node process watched from here.
+
+For each process it prints the resident memory (VmRSS) at the start and at the end, the slope in
+MB per 10,000 ticks (least squares over the samples after the first 10%: allocator and caches
+settle first), and the time per tick over the first and the last 10% of the ticks with their
+ratio. Targets (issue 12): slope below 0.1 MB per 10,000 ticks, last/first below 1.1. A
+benchmark, not a test: the figures depend on the machine and its load.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+SAMPLES = 40  # memory samples over a run
+
+
+def rss_mb(pid: int | str = "self") -> float | None:
+    try:
+        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) / 1024.0
+    except (OSError, ValueError):
+        pass
+    return None
+
+
+def slope_per_10k(points: list[tuple[int, float]]) -> float:
+    """Least-squares slope of (tick, MB) after the first 10% of the ticks, in MB per 10,000 ticks."""
+    if not points:
+        return float("nan")
+    cut = points[-1][0] * 0.1
+    pts = [p for p in points if p[0] >= cut] or points
+    n = len(pts)
+    if n < 2:
+        return float("nan")
+    mx = sum(p[0] for p in pts) / n
+    my = sum(p[1] for p in pts) / n
+    sxx = sum((p[0] - mx) ** 2 for p in pts)
+    return sum((p[0] - mx) * (p[1] - my) for p in pts) / sxx * 1e4 if sxx else float("nan")
+
+
+def per_tick_ends(times: list[tuple[int, float]], n: int) -> tuple[float, float]:
+    """Seconds per tick over the first and the last tenth of ``n`` ticks, from (tick, time) samples:
+    from the first sample to the first one at least n/10 ticks later, and from the last one at least
+    n/10 ticks before the end to the end."""
+    w = max(1, n // 10)
+    t0, s0 = times[0]
+    t1, s1 = next(((t, s) for t, s in times if t >= t0 + w), times[-1])
+    t3, s3 = times[-1]
+    t2, s2 = next(((t, s) for t, s in reversed(times) if t <= t3 - w), times[0])
+    return (s1 - s0) / max(1, t1 - t0), (s3 - s2) / max(1, t3 - t2)
+
+
+def soak_in_process(iterations: int, seed: int = 0, progress=None) -> dict:
+    from homeo_sim.runner import RunConfig, Simulation, build_scenario
+
+    cfg = RunConfig(iterations=iterations, seed=seed)
+    sim = Simulation(build_scenario(cfg), cfg)
+    every = max(1, iterations // 100)  # time samples: 1% steps; memory: SAMPLES
+    mem_every = max(1, iterations // SAMPLES)
+    times = [(0, time.perf_counter())]
+    mem = [(0, rss_mb())]
+
+    def on_tick(t):
+        k = t + 1
+        if k % every == 0:
+            times.append((k, time.perf_counter()))
+            if progress is not None:
+                progress(k)
+        if k % mem_every == 0:
+            mem.append((k, rss_mb()))
+
+    res = sim.run(iterations, on_tick=on_tick)
+    first, last = per_tick_ends(times, iterations)
+    return {"ticks": iterations, "HSR": res.metrics["HSR"],
+            "processes": {"homeo-sim (in-process)": _summary(mem, first, last)}}
+
+
+def _summary(mem, first, last) -> dict:
+    return {"rss_start_mb": mem[0][1], "rss_end_mb": mem[-1][1], "slope_mb_per_10k": slope_per_10k(mem),
+            "s_per_tick_first": first, "s_per_tick_last": last, "last_over_first": last / first if first else None}
+
+
+def soak_graph(ticks: int, seed: int = 0, progress=None) -> dict:
+    from .sim import SimOptions, run_graph
+
+    times: list = []
+    mem: dict = {}
+    procs: dict = {}
+    mem_every = max(1, ticks // SAMPLES)
+    next_mem = [0]
+
+    def on_start(graph):
+        procs.update({"homeo-launch": os.getpid()})
+        procs.update(graph.pids())
+        # a restarted node would have a new pid: the soak counts on none
+
+    def on_progress(tick, fields):
+        now = time.perf_counter()
+        if fields.get("state") in ("running", "finishing", "done") and (not times or tick > times[-1][0]):
+            times.append((tick, now))
+        if tick >= next_mem[0] and procs:
+            next_mem[0] = tick + mem_every
+            for name, pid in procs.items():
+                v = rss_mb(pid)
+                if v is not None:
+                    mem.setdefault(name, []).append((tick, v))
+        if progress is not None:
+            progress(tick)
+
+    with tempfile.TemporaryDirectory(prefix="homeo-soak-") as tmp:
+        o = SimOptions(iterations=ticks, seed=seed, checkpoint_dir=tmp)
+        status = run_graph(o, quiet=True, on_progress=on_progress, on_start=on_start)
+    first, last = per_tick_ends(times, ticks)
+    return {"ticks": ticks, "missed": status.get("missed"), "restarts": status.get("restarts", {}),
+            "HSR": status["metrics"]["HSR"], "processes": {n: _summary(m, first, last) for n, m in mem.items()}}
+
+
+def format_part(title: str, part: dict) -> str:
+    lines = [f"{title}: {part['ticks']} ticks (HSR {part['HSR']:.3f})",
+             f"  {'process':24} {'RSS start':>10} {'RSS end':>9} {'MB/10k':>8} {'ms/tick first':>14} "
+             f"{'last':>7} {'last/first':>10}"]
+    for name, s in part["processes"].items():
+        lines.append(f"  {name:24} {s['rss_start_mb']:9.1f}M {s['rss_end_mb']:8.1f}M {s['slope_mb_per_10k']:8.3f} "
+                     f"{s['s_per_tick_first'] * 1e3:14.4f} {s['s_per_tick_last'] * 1e3:7.4f} "
+                     f"{s['last_over_first']:10.3f}")
+    return "\n".join(lines)
+
+
+def cmd_soak(a) -> int:
+    from homeo_msgs_py.cli_args import UserError
+
+    for opt, v in (("--iterations", a.iterations), ("--ticks", a.ticks)):
+        if 0 < v < 100:
+            raise UserError(f"{opt} {v}: at least 100 ticks (or 0 to skip)")
+    out = {}
+    bar = None
+    if not a.quiet:
+        from tqdm import tqdm
+
+        bar = tqdm(total=a.iterations + a.ticks, unit="tick", file=sys.stderr, leave=False, desc="soak")
+    base = [0]
+
+    def progress(k):
+        if bar is not None:
+            bar.n = base[0] + k
+            bar.refresh()
+
+    try:
+        if a.iterations:
+            out["in_process"] = soak_in_process(a.iterations, a.seed, progress)
+            base[0] = a.iterations
+        if a.ticks:
+            out["graph"] = soak_graph(a.ticks, a.seed, progress)
+    finally:
+        if bar is not None:
+            bar.close()
+    if a.json:
+        print(json.dumps(out))
+        return 0
+    print("target: slope < 0.1 MB per 10,000 ticks, last/first time per tick < 1.1 "
+          "(time per tick of the graph: the whole graph's, from the run status)")
+    for key, title in (("in_process", "in-process"), ("graph", "graph")):
+        if key in out:
+            print(format_part(title, out[key]))
+    return 0
+
+
+def add_parser(sub) -> None:
+    from homeo_msgs_py.cli_args import int_at_least
+
+    s = sub.add_parser("soak", help="memory and time per tick over a long run, in-process and as a graph")
+    s.add_argument("--iterations", type=int_at_least(0), default=1_000_000,
+                   help="in-process ticks (default 1,000,000; 0 = skip)")
+    s.add_argument("--ticks", type=int_at_least(0), default=200_000, help="graph ticks (default 200,000; 0 = skip)")
+    s.add_argument("--seed", type=int_at_least(0), default=0)
+    s.add_argument("--json", action="store_true")
+    s.add_argument("--quiet", action="store_true", help="no progress bar")
