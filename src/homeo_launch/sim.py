@@ -181,8 +181,10 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
             tap.close()
         if mon is not None:
             mon.close()
-        codes = graph.stop()
-        graph.close()
+        try:
+            codes = graph.stop()
+        finally:
+            graph.close()  # the temporary log folder goes, even if a second Ctrl-C cuts the stop short
         if not quiet and any(c not in (0, None, -2, 130) for c in codes.values()):
             bad = ", ".join(f"{n}={c}" for n, c in codes.items() if c not in (0, None, -2, 130))
             print(f"{PROG}: note: nodes stopped with exit codes {bad}", file=sys.stderr)
