@@ -164,3 +164,23 @@ def test_resume_continues_the_schedule_and_ctrl_c_saves_q(tmp_path):
     r = subprocess.run([sys.executable, "-m", "homeo_launch.cli", "sim", "--resume", str(bad)], env=graph_env(d),
                        capture_output=True, text=True, timeout=60)
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and "corrupt checkpoint" in r.stderr, r.stderr
+
+
+def test_the_drives_node_killed_mid_run_is_restarted_and_the_run_completes(tmp_path):
+    """The drives node learns nothing (no checkpoint): restarted, it perceives from the scenario's
+    initial drives again and the run goes on."""
+    n = 400
+    p = _launch("--iterations", str(n), "--rate", "50", "--action-timeout", "1", "--checkpoint-dir",
+                str(tmp_path / "ck"), "--checkpoint-every", "50", "--json", domain=fresh_domain())
+    try:
+        _wait_ticks(tmp_path / "ck" / "homeo_decision.json", 100, p)
+        pid = _child(p.pid, "homeo_decision.drives_node")
+        os.kill(pid, signal.SIGKILL)
+        out, err = p.communicate(timeout=240)
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.communicate()
+    assert p.returncode == 0, err[-3000:]
+    res = json.loads(out)
+    assert res["restarts"] == {"homeo_drives": 1} and res["iterations"] == n

@@ -252,16 +252,17 @@ def test_ctrl_c_stops_every_process_within_5_s_with_no_orphans():
 
 
 def test_a_dead_node_is_named_and_the_rest_are_stopped():
+    # the world node: it holds the run, so it is not restarted (robot nodes are: test_durable_graph.py)
     d = fresh_domain()
     la = _start_launcher(d)
     try:
         _wait_running(d)
         kids = _children(la.pid)
-        victim = next(k for k in kids if "drives_node" in Path(f"/proc/{k}/cmdline").read_text())
+        victim = next(k for k in kids if "homeo_sim.node" in Path(f"/proc/{k}/cmdline").read_text())
         os.kill(victim, signal.SIGKILL)
         out, err = la.communicate(timeout=20)
         assert la.returncode == 1
-        assert "node homeo_drives exited with code -9" in err
+        assert "node homeo_sim exited with code -9" in err
         assert not [k for k in kids if _alive(k)]
     finally:
         if la.poll() is None:

@@ -37,7 +37,9 @@ from homeo_msgs_py import graph as G
 from homeo_msgs_py.cli_args import UserError, float_in, int_at_least
 
 from .processes import Graph, NodeSpec, dds_defaults, graph_env
-from .sim import DISCOVERY_TIMEOUT_S, PROG, GraphError, Monitor, check_alive, wait_until_up
+from .sim import DISCOVERY_TIMEOUT_S, PROG, GraphError, Monitor
+from .supervise import Supervisor
+from .supervise import wait_until_up as supervised_wait
 
 BRIDGE_NODES = G.GRAPHS["pepper"]
 STANDIN_START_S = 30.0
@@ -228,7 +230,7 @@ def scenario_file(path: str | None, out_dir: Path, continue_schedule: bool) -> s
 def pepper_specs(*, url: str, scenario: str, overrides: dict, seed: int, dod: float | None, q_table: str | None,
                  interactions: int, collect_window: float, collect_quiet: float, action_timeout: float,
                  end_with_script: bool, user: str = "", password: str = "", config: str = "",
-                 intention: str = "cues", extra_readers: int = 0) -> list[NodeSpec]:
+                 intention: str = "cues", extra_readers: int = 0, durable: dict | None = None) -> list[NodeSpec]:
     common = {"scenario": scenario, "overrides": json.dumps(overrides)}
     decision = dict(common, seed=seed)
     if dod is not None:
@@ -242,12 +244,19 @@ def pepper_specs(*, url: str, scenario: str, overrides: dict, seed: int, dod: fl
                   intention_cues=intention == "cues", outcome_readers=endpoints(intention)["outcome"][1] + extra_readers)
     params = {"pepper_bridge": bridge, "homeo_intention": dict(common, mode=INTENTION_MODES[intention]),
               "homeo_drives": dict(common), "homeo_decision": decision}
+    if durable:
+        from types import SimpleNamespace
+
+        from .sim import durable_params
+
+        durable_params(SimpleNamespace(**durable), params)
     return [NodeSpec(n, G.NODES[n].module, params[n]) for n in BRIDGE_NODES]
 
 
 def run_pepper_graph(specs: list[NodeSpec], log_dir: Path, standin: StandinProcess | None = None, on_row=None,
                      last: dict | None = None, discovery_timeout: float = DISCOVERY_TIMEOUT_S,
-                     env: dict | None = None, intention: str = "cues", sinks=()) -> dict:
+                     env: dict | None = None, intention: str = "cues", sinks=(), max_restarts: int = 0,
+                     checkpoint_dir: str = "", quiet: bool = False) -> dict:
     """Run the bridge graph until the bridge reports done; returns its last run status fields.
     Raises GraphError (a node or the stand-in died, or the graph never came up) or KeyboardInterrupt.
     ``sinks``: as for ``sim.run_graph``; the robot nodes start first and the bridge waits for the
@@ -259,6 +268,8 @@ def run_pepper_graph(specs: list[NodeSpec], log_dir: Path, standin: StandinProce
     shown = 0
     try:
         mon = Monitor()
+        sup = Supervisor(graph, mon.node, max_restarts, os.path.abspath(checkpoint_dir) if checkpoint_dir else "",
+                         log=(lambda text: None) if quiet else None)
         if sinks:
             from .sim import start_robot_first
             from .tap import Tap
@@ -266,10 +277,10 @@ def run_pepper_graph(specs: list[NodeSpec], log_dir: Path, standin: StandinProce
             tap = Tap(mon.node, sinks)
             start_robot_first(graph, mon, tap, discovery_timeout)
         graph.start()
-        _wait_up(graph, mon, standin, endpoints(intention), discovery_timeout)
+        _wait_up(graph, mon, standin, endpoints(intention), discovery_timeout, sup)
         while True:
             mon.spin(0.05)
-            check_alive(graph)
+            sup.check()  # robot nodes are restarted from their checkpoints; the bridge's death is fatal
             _check_standin(standin)
             st = mon.status
             if st is None:
@@ -282,12 +293,14 @@ def run_pepper_graph(specs: list[NodeSpec], log_dir: Path, standin: StandinProce
                 for r in rows[shown:]:
                     on_row(r)
             shown = max(shown, len(rows))
+            if sup.restarts and last is not None:
+                last["restarts"] = dict(sup.restarts)
             if st.fields["done"]:
                 if tap is not None:
                     from .sim import drain
 
                     drain(mon, tap)
-                return dict(st.fields)
+                return dict(st.fields, **({"restarts": dict(sup.restarts)} if sup.restarts else {}))
     finally:
         if tap is not None:
             tap.close()
@@ -296,12 +309,12 @@ def run_pepper_graph(specs: list[NodeSpec], log_dir: Path, standin: StandinProce
         graph.stop()
 
 
-def _wait_up(graph, mon, standin, endpoints, bound) -> None:
+def _wait_up(graph, mon, standin, endpoints, bound, sup) -> None:
     end = time.monotonic() + bound
     while True:
         _check_standin(standin)
         try:
-            return wait_until_up(graph, mon, BRIDGE_NODES, endpoints, min(1.0, max(0.0, end - time.monotonic())))
+            return supervised_wait(graph, mon, sup, BRIDGE_NODES, endpoints, min(1.0, max(0.0, end - time.monotonic())))
         except GraphError:
             if time.monotonic() > end or graph.dead():
                 raise
@@ -340,14 +353,22 @@ def run_robot(a, label: str, dod: float | None, q_table: str | None, log_dir: Pa
             standin = StandinProcess(script, a.seed, a.time_scale, log_dir / "standin.log", a.config)
             url = standin.url
         sc_path = scenario_file(a.scenario, log_dir, bool(q_table) and not a.fresh_schedule)
+        durable = dict(getattr(a, "durable", None) or {"checkpoint_dir": "", "checkpoint_every": 100, "resume": None,
+                                                       "max_restarts": 0})
+        if durable["checkpoint_dir"] and label != "robot":  # the field test's two robots: one folder each
+            durable["checkpoint_dir"] = os.path.join(durable["checkpoint_dir"], label)
+        from .sim import new_session
+
+        durable["session"] = new_session()
         specs = pepper_specs(url=url, scenario=sc_path, overrides=overrides, seed=a.seed, dod=dod, q_table=q_table,
                              interactions=a.interactions, collect_window=a.collect_window,
                              collect_quiet=a.collect_quiet, action_timeout=a.action_timeout,
                              end_with_script=bool(a.standin and script), user=a.user or "",
                              password=a.password or "", config=a.config or "", intention=a.intention,
-                             extra_readers=1 if sinks else 0)
+                             extra_readers=1 if sinks else 0, durable=durable)
         status = run_pepper_graph(specs, log_dir, standin, on_row=on_row, last=last, intention=a.intention,
-                                  sinks=sinks)
+                                  sinks=sinks, max_restarts=durable["max_restarts"],
+                                  checkpoint_dir=durable["checkpoint_dir"], quiet=getattr(a, "quiet", False))
         user_log = standin.user_log() if standin is not None else []
         return {"label": label, "dod": dod, "status": status, "user_log": user_log}
     finally:
@@ -429,9 +450,11 @@ def add_parser(subparsers) -> None:
     p.add_argument("--log-dir", metavar="DIR", help="keep each node's log here (default: a temporary directory)")
     p.add_argument("--json", action="store_true", help="print the interaction log as JSON")
     p.add_argument("--quiet", action="store_true", help="no per-interaction progress on stderr")
+    from .durable_args import add_durable_options
     from .live_args import add_live_options
 
     add_live_options(p)
+    add_durable_options(p, "pepper")
 
 
 def _check_args(a) -> None:
@@ -465,7 +488,13 @@ def _check_args(a) -> None:
     from pepper_bridge.config import load_config
 
     # a bad scenario or config is a one-line error here, not in four nodes
-    load_config(a.config, scenario=load_scenario(a.scenario))
+    sc = load_scenario(a.scenario)
+    load_config(a.config, scenario=sc)
+    if a.resume and (a.field or a.q_table):
+        raise UserError("--resume continues one robot from its checkpoint: leave out --field and --q-table")
+    from .durable_args import durable_options
+
+    a.durable = durable_options(a, "pepper", sc, a.intention == "bayes")
 
 
 def _row_line(r: dict) -> str:
@@ -556,6 +585,8 @@ def _cmd_one(a, base: Path) -> int:
         if res.user_log:
             out["summary"] = res.summary()
             out["user_log"] = res.user_log
+        if st.get("restarts"):
+            out["restarts"] = st["restarts"]
         print(json.dumps(out, indent=1))
     else:
         if res.user_log:
@@ -565,6 +596,8 @@ def _cmd_one(a, base: Path) -> int:
             for r in res.log:
                 print(_row_line(r))
         print(f"{len(res.log)} interactions, {st.get('missed', 0)} missed")
+        if st.get("restarts"):
+            print("restarts: " + ", ".join(f"{n} {k}" for n, k in sorted(st["restarts"].items())))
     return code
 
 
