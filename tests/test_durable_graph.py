@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from rosgraph import fresh_domain
+from rosgraph import Probe, fresh_domain
 
 from homeo_decision import checkpoint
 from homeo_decision.agent import DecisionCore
@@ -77,8 +77,11 @@ def _learned_digest(node: str, ck: dict) -> str:
 def test_a_node_killed_mid_run_is_restarted_from_its_checkpoint_and_the_run_completes(tmp_path, node):
     ck_dir, logs = tmp_path / "ck", tmp_path / "logs"
     n = 500
+    d = fresh_domain()
+    probe = Probe(d)
+    diag = probe.diagnostics()
     p = _launch("--iterations", str(n), "--rate", "50", "--action-timeout", "1", "--checkpoint-dir", str(ck_dir),
-                "--checkpoint-every", "50", "--log-dir", str(logs), "--json", domain=fresh_domain())
+                "--checkpoint-every", "50", "--log-dir", str(logs), "--json", domain=d)
     try:
         path = ck_dir / f"{node}.json"
         _wait_ticks(path, 100, p)
@@ -88,8 +91,11 @@ def test_a_node_killed_mid_run_is_restarted_from_its_checkpoint_and_the_run_comp
         while Path(f"/proc/{pid}").exists() and _child(p.pid, MODULES[node]) == pid:
             time.sleep(0.01)
         last = json.loads(path.read_text())  # the last checkpoint the killed process wrote
+        # the launcher says it on /diagnostics
+        assert probe.spin_until(lambda: diag.get("homeo_launch: supervision", {}).get("values") == {node: "1"}, 60.0)
         out, err = p.communicate(timeout=240)
     finally:
+        probe.close()
         if p.poll() is None:
             p.kill()
             p.communicate()
@@ -137,26 +143,33 @@ def test_a_node_that_keeps_dying_stops_the_graph_with_one_line(tmp_path):
 def test_resume_continues_the_schedule_and_ctrl_c_saves_q(tmp_path):
     d = fresh_domain()
     ck = tmp_path / "ck"
-    r = subprocess.run([sys.executable, "-m", "homeo_launch.cli", "sim", "--quiet", "--json", "--iterations", "300",
+    r = subprocess.run([sys.executable, "-m", "homeo_launch.cli", "sim", "--quiet", "--json", "--iterations", "1000",
                         "--checkpoint-dir", str(ck)], env=graph_env(d), capture_output=True, text=True, timeout=240)
     assert r.returncode == 0, r.stderr[-2000:]
     first = json.loads((ck / "homeo_decision.json").read_text())
-    assert first["ticks"] == 300 and first["tick_offset"] == 0
+    assert first["ticks"] == 1000 and first["tick_offset"] == 0
     # resume into the same folder, until Ctrl-C; --save-q is honoured on the interrupt
     q = tmp_path / "q.json"
+    probe = Probe(d)
+    actions = probe.collect("/homeo/action")
     p = _launch("--iterations", "0", "--rate", "100", "--resume", str(ck), "--save-q", str(q), domain=d)
     try:
-        _wait_ticks(ck / "homeo_decision.json", 400, p)
+        _wait_ticks(ck / "homeo_decision.json", 1100, p)
+        probe.spin_until(lambda: False, 0.3)
         p.send_signal(signal.SIGINT)
         out, err = p.communicate(timeout=60)
     finally:
+        probe.close()
         if p.poll() is None:
             p.kill()
             p.communicate()
+    # the schedule went on at tick 1000: alpha 0.1 / tau 2.0 (a fresh start would choose at tau 4.0)
+    assert len(actions) >= 50 and actions[0]["tick"] == 0
+    assert {a["tau"] for a in actions} == {2.0}
     assert p.returncode == 0, err[-2000:]  # an unbounded run ends with Ctrl-C
     assert "HSR" in out and q.exists()
     after = json.loads((ck / "homeo_decision.json").read_text())
-    assert after["tick_offset"] == 300 and after["ticks"] > 400  # the final checkpoint, at shutdown
+    assert after["tick_offset"] == 1000 and after["ticks"] > 1100  # the final checkpoint, at shutdown
     assert not list(tmp_path.rglob("*.tmp"))
     bad = tmp_path / "bad"
     bad.mkdir()

@@ -28,6 +28,8 @@ def durable_options(a, graph: str, sc, bayes: bool) -> dict:
     """SimOptions fields from the arguments; a resume folder that cannot be used is a UserError."""
     if a.no_checkpoints and a.checkpoint_dir:
         raise UserError("--checkpoint-dir and --no-checkpoints contradict each other")
+    if a.resume and getattr(a, "load_q", None):
+        raise UserError("--resume and --load-q: the checkpoint holds the Q-table; give one of them")
     if a.resume:
         check_resume(a.resume, sc, bayes)
     if a.no_checkpoints:

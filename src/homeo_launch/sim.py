@@ -3,13 +3,16 @@
     homeo-launch sim [--iterations N (0 = until Ctrl-C)] [--rate HZ] [--seed S] [--dod X] [--xi X]
                      [--no-pseudo] [--scenario FILE] [--set KEY=VALUE] [--load-q FILE] [--save-q FILE]
                      [--trace FILE] [--json] [--quiet] [--log-dir DIR]
+                     [--checkpoint-dir DIR] [--checkpoint-every N] [--no-checkpoints] [--resume DIR]
+                     [--max-restarts N]
     homeo-launch pepper [--qi-url URL | --standin --script FILE] [--q-table FILE] [--dod X] [--json]
     homeo-launch bench [--iterations N] [--rounds R] [--json]
 
 ``sim`` starts homeo_sim, homeo_intention, homeo_drives and homeo_decision, waits until all
 are discovered and matched, shows progress, and prints the metrics of ``homeo-sim run``
-(the same JSON with ``--json``). Ctrl-C stops every node; a node that dies is named with
-its exit code and the rest are stopped.
+(the same JSON with ``--json``). Ctrl-C stops every node after saving what was asked (``--save-q``,
+the nodes' final checkpoints). A robot node that dies is restarted from its checkpoint
+(``supervise.py``); the world node's death, or too many, stops the rest with its name.
 """
 
 from __future__ import annotations

@@ -115,6 +115,7 @@ def soak_graph(ticks: int, seed: int = 0, progress=None) -> dict:
     procs: dict = {}
     mem_every = max(1, ticks // SAMPLES)
     next_mem = [0]
+    step = max(1, ticks // 200)
 
     def on_start(graph):
         procs.update({"homeo-launch": os.getpid()})
@@ -123,7 +124,9 @@ def soak_graph(ticks: int, seed: int = 0, progress=None) -> dict:
 
     def on_progress(tick, fields):
         now = time.perf_counter()
-        if fields.get("state") in ("running", "finishing", "done") and (not times or tick > times[-1][0]):
+        # a bounded number of samples: the watcher must not grow with the run it watches
+        if fields.get("state") in ("running", "finishing", "done") and (not times or tick >= times[-1][0] + step
+                                                                        or fields.get("done")):
             times.append((tick, now))
             for name, pid in procs.items():
                 c = cpu_s(pid)
