@@ -59,6 +59,13 @@ def _wait_ticks(path: Path, ticks: int, proc: subprocess.Popen, bound: float = 1
     raise AssertionError(f"{path} never reached {ticks} ticks")
 
 
+def _ticks(path: Path) -> int:
+    try:
+        return json.loads(path.read_text())["ticks"]
+    except (OSError, ValueError, KeyError):
+        return -1
+
+
 def _learned_digest(node: str, ck: dict) -> str:
     sc = load_scenario()
     if node == "homeo_decision":
@@ -154,8 +161,9 @@ def test_resume_continues_the_schedule_and_ctrl_c_saves_q(tmp_path):
     actions = probe.collect("/homeo/action")
     p = _launch("--iterations", "0", "--rate", "100", "--resume", str(ck), "--save-q", str(q), domain=d)
     try:
-        _wait_ticks(ck / "homeo_decision.json", 1100, p)
-        probe.spin_until(lambda: False, 0.3)
+        # spin the probe meanwhile: it takes in the actions as they come
+        assert probe.spin_until(lambda: p.poll() is not None or _ticks(ck / "homeo_decision.json") >= 1100, 120.0)
+        assert p.poll() is None
         p.send_signal(signal.SIGINT)
         out, err = p.communicate(timeout=60)
     finally:
