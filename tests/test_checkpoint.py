@@ -195,3 +195,15 @@ def test_rejoining_join_takes_a_mid_run_start_and_skips_ticks_that_cannot_comple
     assert [k for k, _ in j.put("observation", _msg(4002))] == [4002]
     with pytest.raises(Rejected, match="stale"):
         j.put("observation", _msg(4001))
+
+
+@pytest.mark.parametrize("args, why", [
+    (["--resume", "/nonexistent/ck"], "--resume /nonexistent/ck: no such directory"),
+    (["--resume", ".", "--load-q", __file__], "--resume and --load-q"),
+    (["--checkpoint-dir", "x", "--no-checkpoints"], "contradict"),
+    (["--checkpoint-every", "0"], "--checkpoint-every"),
+])
+def test_launcher_refuses_bad_checkpoint_options_in_one_line(args, why):
+    r = subprocess.run([sys.executable, "-m", "homeo_launch.cli", "sim", *args], capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 2 and why in r.stderr and r.stderr.count("\n") == 1, r.stderr
