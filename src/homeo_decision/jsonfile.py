@@ -11,15 +11,27 @@ from pathlib import Path
 def write_atomic(path: str | Path, obj, error: type[Exception], what: str) -> None:
     """Write ``obj`` as compact JSON atomically, so a crash never leaves half a file."""
     p = Path(path)
-    data = json.dumps(obj, separators=(",", ":"))
+    tmp = None
     try:
+        data = json.dumps(obj, separators=(",", ":"), allow_nan=False)
+        if p.is_dir():
+            raise IsADirectoryError(21, "is a directory")
         p.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=p.parent, prefix=p.name, suffix=".tmp")
         with os.fdopen(fd, "w") as fh:
             fh.write(data)
+            fh.flush()
+            os.fsync(fh.fileno())  # the data is on disk before the name points at it
         os.replace(tmp, p)
-    except OSError as exc:
-        raise error(f"cannot write {what} {p}: {exc.strerror or exc}") from None
+        tmp = None
+    except (OSError, ValueError) as exc:  # ValueError: a NaN, which JSON cannot hold
+        raise error(f"cannot write {what} {p}: {getattr(exc, 'strerror', None) or exc}") from None
+    finally:
+        if tmp is not None:  # a failed write leaves nothing behind
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
 
 
 def read(path: str | Path, error: type[Exception], what: str):

@@ -18,13 +18,26 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import time
 from dataclasses import dataclass
 from typing import Any, Callable
 
 VERSION = 1
 ENVELOPE = ("schema", "version", "run", "tick", "stamp")
-MAX_TEXT = 1 << 20  # a message longer than this is not ours
+AUTH_KEY = "auth"  # the graph's signature, appended last (``auth.py``); not part of the fields
+
+# Limits of the decode boundary: every payload within them is decoded, every other is refused
+# with a reason. The largest message of the graph (a run status with its metrics) is about 3 kB.
+MAX_TEXT = 64 * 1024  # characters of one message
+MAX_DEPTH = 8  # nesting of objects and arrays
+MAX_STR = 1024  # characters of one string or key
+MAX_ITEMS = 4096  # values in one message
+MAX_INT_DIGITS = 18  # |n| < 10**18: the ticks and runs of centuries of running
+MAX_REASON = 200  # characters of a reason kept for /diagnostics and the log
+
+
+_SURROGATE = re.compile(r"\\u[dD][89a-fA-F][0-9a-fA-F]{2}")
 
 
 class Rejected(ValueError):
@@ -305,19 +318,91 @@ def encode(schema: str, tick: int, fields: dict, run: int = 0, stamp: float | No
     env = {"schema": schema, "version": VERSION, "run": run, "tick": tick,
            "stamp": time.time() if stamp is None else stamp}
     env.update(fields)
-    return json.dumps(env, separators=(",", ":"))
+    try:
+        return json.dumps(env, separators=(",", ":"), allow_nan=False)
+    except ValueError:  # a NaN or an infinity in the fields (a metric of no samples): null
+        return json.dumps(finite(env), separators=(",", ":"), allow_nan=False)
+
+
+def finite(obj):
+    """``obj`` with every NaN and infinity replaced by None: what JSON can carry (RFC 8259)."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: finite(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [finite(v) for v in obj]
+    return obj
+
+
+def short(text: str, limit: int = MAX_REASON) -> str:
+    """A reason cut to ``limit`` characters, printable: what a sender put in it cannot flood
+    /diagnostics or the log, nor break their encoding (lone surrogates become escapes)."""
+    text = text.encode("utf-8", "backslashreplace").decode("utf-8")
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+def _parse_int(digits: str) -> int:
+    if len(digits.lstrip("-")) > MAX_INT_DIGITS:
+        raise Rejected(f"an integer of {len(digits.lstrip('-'))} digits (at most {MAX_INT_DIGITS})")
+    return int(digits)
+
+
+def _parse_float(text: str) -> float:
+    if len(text) > 64:
+        raise Rejected(f"a number of {len(text)} characters")
+    v = float(text)
+    if not math.isfinite(v):
+        raise Rejected(f"number {text[:24]} is out of range")
+    return v
+
+
+def _parse_constant(name: str):
+    raise Rejected(f"{name} is not JSON (use null)")
+
+
+def _check_tree(value: Any) -> None:
+    """Depth, string length, number of values and encodable text of a parsed JSON value."""
+    stack = [(value, 1)]
+    count = 0
+    while stack:
+        v, depth = stack.pop()
+        count += 1
+        if count > MAX_ITEMS:
+            raise Rejected(f"more than {MAX_ITEMS} values")
+        if isinstance(v, str):
+            if len(v) > MAX_STR:
+                raise Rejected(f"a string of {len(v)} characters (at most {MAX_STR})")
+        elif isinstance(v, (dict, list)):
+            if depth > MAX_DEPTH:
+                raise Rejected(f"nested deeper than {MAX_DEPTH}")
+            if isinstance(v, dict):
+                for k, x in v.items():
+                    if len(k) > MAX_STR:
+                        raise Rejected(f"a key of {len(k)} characters (at most {MAX_STR})")
+                    stack.append((x, depth + 1))
+            else:
+                stack.extend((x, depth + 1) for x in v)
 
 
 def parse_json(text, limit: int = MAX_TEXT, what: str = "") -> Any:
-    """The JSON value of a message's text, or :class:`Rejected` (not a string, too long, not JSON)."""
+    """The JSON value of a message's text, or :class:`Rejected` with the reason: not a string,
+    too long, not JSON, or beyond a limit (depth, string length, integer digits, non-finite
+    numbers, text that is not valid Unicode)."""
     if not isinstance(text, str):
         raise Rejected("not a string")
     if len(text) > limit:
         raise Rejected(f"message of {len(text)} characters is too long{what}")
+    if "\\u" in text and _SURROGATE.search(text):
+        raise Rejected("a \\u escape of a surrogate (send the character itself)")
     try:
-        return json.loads(text)
-    except (json.JSONDecodeError, RecursionError) as exc:
-        raise Rejected(f"not JSON ({exc.msg if hasattr(exc, 'msg') else exc})") from None
+        value = json.loads(text, parse_int=_parse_int, parse_float=_parse_float, parse_constant=_parse_constant)
+    except Rejected:
+        raise
+    except (ValueError, RecursionError) as exc:  # JSONDecodeError is a ValueError
+        raise Rejected(short(f"not JSON ({exc.msg if hasattr(exc, 'msg') else exc})")) from None
+    _check_tree(value)
+    return value
 
 
 def decode(text: str, voc: Vocabulary, expect: str | None = None) -> Message:
@@ -329,15 +414,15 @@ def validate(obj: Any, voc: Vocabulary, expect: str | None = None) -> Message:
     if not isinstance(obj, dict):
         raise Rejected(f"not a JSON object but {type(obj).__name__}")
     schema = obj.get("schema")
-    if schema not in SCHEMAS:
-        raise Rejected(f"unknown schema {schema!r}")
+    if not isinstance(schema, str) or schema not in SCHEMAS:
+        raise Rejected(short(f"unknown schema {schema!r}"))
     if expect is not None and schema != expect:
         raise Rejected(f"schema {schema!r} on a topic that carries {expect!r}")
     if obj.get("version") != VERSION:
-        raise Rejected(f"{schema} version {obj.get('version')!r} is not {VERSION}")
+        raise Rejected(short(f"{schema} version {obj.get('version')!r} is not {VERSION}"))
     run = _int(0, 2**62)(obj.get("run"), voc, "run")
     tick = _int(0, 2**62)(obj.get("tick"), voc, "tick")
     stamp = _num(0.0, 1e12)(obj.get("stamp"), voc, "stamp")
-    body = {k: v for k, v in obj.items() if k not in ENVELOPE}
+    body = {k: v for k, v in obj.items() if k not in ENVELOPE and k != AUTH_KEY}
     fields = _fields(body, SCHEMAS[schema], voc, "")
     return Message(schema, run, tick, stamp, fields)

@@ -80,7 +80,7 @@ class BridgeNode(ScenarioNode):
                                                            "('' = scripts/pepper.json)", read_only=True))
         self.declare_parameter("battery_source", "memory", D(
             description="memory (ALMemory battery fraction) or albattery (ALBattery.getBatteryCharge)", read_only=True))
-        self.declare_parameter("interactions", 0, _int(0, 10**9, "interactions per run (0 = until stopped)"))
+        self.declare_parameter("interactions", 0, _int(0, G.TICKS_MAX, "interactions per run (0 = until stopped)"))
         self.declare_parameter("collect_window", 3.0, _float(0.0, 600.0, "longest wait for the user's reaction (s)"))
         self.declare_parameter("collect_quiet", 0.15, _float(0.0, 600.0, "a gap without robot events that ends the "
                                                                         "wait early (s; = collect_window: wait it out)"))
@@ -248,17 +248,10 @@ class BridgeNode(ScenarioNode):
             out.append(f"the robot at {self.link['url']} is {self.link['state']} ({self.link['reason']})")
         if not self.get_parameter("wait_for_readers").value:
             return out
-        for key, pub in self.pubs.items():
-            if key == "run_status":
-                continue  # read by the launcher, not by a node
-            want = self.get_parameter("outcome_readers").value if key == "outcome" \
-                else G.readers("pepper", key, self.learning)
-            if pub.matched() < want:
-                out.append(f"{pub.topic} has {pub.matched()}/{want} readers")
-        for i in DESC.inputs:
-            if self.count_publishers(G.topic_name(i.topic)) < 1:
-                out.append(f"{G.topic_name(i.topic)} has no writer")
-        return out
+        pubs = {k: p for k, p in self.pubs.items() if k != "run_status"}  # read by the launcher, not a node
+        outcome = self.get_parameter("outcome_readers").value
+        return out + self.gate_missing(pubs, lambda key: outcome if key == "outcome"
+                                       else G.readers("pepper", key, self.learning), [i.topic for i in DESC.inputs])
 
     # -- status and diagnostics ----------------------------------------------------------------
     def _publish_status(self) -> None:
