@@ -264,7 +264,7 @@ def run_pepper_graph(specs: list[NodeSpec], log_dir: Path, standin: StandinProce
             from .sim import start_robot_first
             from .tap import Tap
 
-            tap = Tap(mon.node, sinks)
+            tap = Tap(mon.node, sinks, signer=graph.signer)
             start_robot_first(graph, mon, tap, discovery_timeout)
         graph.start()
         _wait_up(graph, mon, standin, endpoints(intention), discovery_timeout)

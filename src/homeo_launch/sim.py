@@ -96,7 +96,7 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
         if sinks:
             from .tap import Tap
 
-            tap = Tap(mon.node, sinks)
+            tap = Tap(mon.node, sinks, signer=graph.signer)
             for s in sinks:
                 if hasattr(s, "attach"):
                     s.attach(mon.node)
@@ -252,18 +252,20 @@ def options_from_args(a) -> SimOptions:
 
 def open_sinks(a, graph: str, iterations: int, seed: int, sc, overrides, **extra) -> list:
     """The tap's sinks the command line asks for: ``--record DIR`` (a bag), ``--foxglove`` (live)."""
+    from .tap import tapped_topics
+
+    topics = tapped_topics(namespace=getattr(a, "namespace", ""))
     sinks = []
     try:
         if getattr(a, "record", None):
             from .record import BagSink, check_new_bag, run_info
-            from .tap import tapped_topics
 
             sinks.append(BagSink(check_new_bag(a.record), run_info(graph, iterations, seed, sc, overrides, **extra),
-                                 tapped_topics()))
+                                 topics))
         if getattr(a, "foxglove", None):
             from .live import FoxgloveSink
 
-            sinks.append(FoxgloveSink(a.foxglove, sc, person=getattr(a, "human", "sim") == "person"))
+            sinks.append(FoxgloveSink(a.foxglove, sc, topics, person=getattr(a, "human", "sim") == "person"))
             if not getattr(a, "quiet", False):
                 print(f"{PROG}: Foxglove: open ws://{a.foxglove[0]}:{sinks[-1].port}", file=sys.stderr)
     except BaseException:

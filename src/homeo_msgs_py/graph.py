@@ -88,7 +88,8 @@ NODES: dict[str, NodeDesc] = {
     "homeo_decision": NodeDesc("homeo_decision", "homeo_decision.node", "decision", ("action",),
                                (Input("drives"),), ("~/save_q", "~/load_q", "~/reset")),
 }
-LAUNCHER = "homeo_launch"  # the launcher's own node (its monitor and tap)
+LAUNCHER = "homeo_launch"  # the launcher's own node (its monitor)
+RECORDER = "homeo_record"  # the launcher's tap (a bag, a live view)
 ROBOT_NODES = ("homeo_intention", "homeo_drives", "homeo_decision")
 GRAPHS: dict[str, tuple] = {
     "sim": ("homeo_sim",) + ROBOT_NODES,
@@ -101,9 +102,10 @@ def topic_name(key: str) -> str:
 
 
 def key_of(name: str) -> str | None:
-    """The key of a topic given by its name, with or without the leading slash (None: not ours)."""
+    """The key of a topic given by its name, with or without the leading slash and a namespace
+    (``/r1/homeo/world``); None: not ours."""
     bare = name.lstrip("/")
-    return next((k for k, t in TOPICS.items() if t.name == bare), None)
+    return next((k for k, t in TOPICS.items() if bare == t.name or bare.endswith("/" + t.name)), None)
 
 
 def schema_of(key: str) -> str:

@@ -19,7 +19,7 @@ from std_msgs.msg import String
 from . import data_dir
 from .auth import AuthError, load_signer
 from .diagnostics import RejectLog
-from .graph import DIAGNOSTICS, LAUNCHER, NODES, SIGNED, TOPICS, own_endpoints
+from .graph import DIAGNOSTICS, LAUNCHER, NODES, RECORDER, SIGNED, TOPICS, own_endpoints
 from .qos import pub_qos, quiet_pub_events, quiet_sub_events, sub_qos
 from .schemas import Message, Rejected, Vocabulary, decode, encode, short
 
@@ -157,7 +157,7 @@ class HomeoNode(Node):
         in this namespace: another program listening on the domain does not count), and a writer of
         this graph for each input topic key."""
         ns = self.get_namespace()
-        mine = set(NODES) | {LAUNCHER}
+        mine = set(NODES) | {LAUNCHER, RECORDER}
         out = []
         for key, pub in pubs.items():
             n = want(key)
