@@ -399,7 +399,9 @@ def parse_json(text, limit: int = MAX_TEXT, what: str = "") -> Any:
         value = json.loads(text, parse_int=_parse_int, parse_float=_parse_float, parse_constant=_parse_constant)
     except Rejected:
         raise
-    except (ValueError, RecursionError) as exc:  # JSONDecodeError is a ValueError
+    except RecursionError:  # the parser's own limit (about 1000 levels)
+        raise Rejected(f"nested deeper than {MAX_DEPTH}") from None
+    except ValueError as exc:  # JSONDecodeError is a ValueError
         raise Rejected(short(f"not JSON ({exc.msg if hasattr(exc, 'msg') else exc})")) from None
     _check_tree(value)
     return value
