@@ -53,8 +53,8 @@ class DecisionNode(ScenarioNode):
             description="seed of the decision's random stream (setting it reseeds)",
             integer_range=[IntegerRange(from_value=0, to_value=SEED_MAX, step=1)]))
         self.declare_parameter("q_table_path", "", ParameterDescriptor(description="Q-table file of ~/save_q, ~/load_q"))
-        self.declare_parameter("load_on_start", False, ParameterDescriptor(
-            description="load q_table_path when the node starts", read_only=True))
+        self.declare_fixed("load_on_start", False, ParameterDescriptor(
+            description="load q_table_path when the node starts"))
         p = lambda n: self.get_parameter(n).value  # noqa: E731
         self.core = DecisionCore(self.sc, p("seed"), dod=p("dod"), xi=p("xi"), gamma=p("gamma"),
                                  pseudo_update=p("pseudo_update"), feedback=p("feedback"))

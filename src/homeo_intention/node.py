@@ -34,11 +34,11 @@ DESC = NODES["homeo_intention"]
 class IntentionNode(ScenarioNode):
     def __init__(self):
         super().__init__(DESC.name)
-        self.declare_parameter("mode", BAYES, ParameterDescriptor(
+        self.declare_fixed("mode", BAYES, ParameterDescriptor(
             description=f"recognition mode: {', '.join(INTENTION_MODES)} (set at start)"))
         self.declare_parameter("model_path", "", ParameterDescriptor(description="model file of ~/save_model, ~/load_model"))
-        self.declare_parameter("load_on_start", False, ParameterDescriptor(
-            description="load model_path when the node starts", read_only=True))
+        self.declare_fixed("load_on_start", False, ParameterDescriptor(
+            description="load model_path when the node starts"))
         mode = self.get_parameter("mode").value
         try:
             self.model_path = self.data_path(self.get_parameter("model_path").value, "model_path")
@@ -76,8 +76,6 @@ class IntentionNode(ScenarioNode):
                     self.model_path = self.data_path(prm.value, "model_path")
                 except OutsideDataDir as exc:
                     return SetParametersResult(successful=False, reason=str(exc))
-            elif prm.name == "mode" and prm.value != self.get_parameter("mode").value:
-                return SetParametersResult(successful=False, reason="mode is set when the node starts")
         return SetParametersResult(successful=True)
 
     # -- services -------------------------------------------------------------------------

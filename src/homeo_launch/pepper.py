@@ -229,7 +229,9 @@ def pepper_specs(*, url: str, scenario: str, overrides: dict, seed: int, dod: fl
                  interactions: int, collect_window: float, collect_quiet: float, action_timeout: float,
                  end_with_script: bool, user: str = "", password: str = "", config: str = "",
                  intention: str = "cues", extra_readers: int = 0, data_dir: str = "out") -> list[NodeSpec]:
-    common = {"scenario": scenario, "overrides": json.dumps(overrides), "data_dir": os.path.abspath(data_dir)}
+    from homeo_decision.node_runtime import overrides_param
+
+    common = {"scenario": scenario, "overrides": overrides_param(overrides), "data_dir": os.path.abspath(data_dir)}
     decision = dict(common, seed=seed)
     if dod is not None:
         decision["dod"] = float(dod)

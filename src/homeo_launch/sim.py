@@ -57,7 +57,9 @@ class SimOptions:
 
 
 def sim_specs(o: SimOptions) -> list[NodeSpec]:
-    common = {"scenario": o.scenario or "", "overrides": json.dumps(dict(o.overrides)),
+    from homeo_decision.node_runtime import overrides_param
+
+    common = {"scenario": o.scenario or "", "overrides": overrides_param(dict(o.overrides)),
               "data_dir": os.path.abspath(o.data_dir)}
     decision = dict(common, seed=o.seed)
     for k, v in (("dod", o.dod), ("xi", o.xi)):

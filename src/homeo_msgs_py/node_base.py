@@ -98,10 +98,10 @@ class HomeoNode(Node):
 
         from rcl_interfaces.msg import ParameterDescriptor
 
-        self.declare_parameter("data_dir", data_dir.default_dir(), ParameterDescriptor(
+        self._fixed: dict = {}  # parameters set at start: a change is refused, the same value accepted
+        self._data_dir = self.declare_fixed("data_dir", data_dir.default_dir(), ParameterDescriptor(
             description="files named by parameters (paths) live here; set at start"))
-        self._data_dir = self.get_parameter("data_dir").value
-        self.add_on_set_parameters_callback(self._guard_data_dir)
+        self.add_on_set_parameters_callback(self._guard_fixed)
         self._diag_pub = self.create_publisher(DiagnosticArray, DIAGNOSTICS, 10, event_callbacks=quiet_pub_events())
         self._diag_timer = self.create_timer(DIAG_PERIOD_S, self.publish_diagnostics)
 
@@ -110,12 +110,20 @@ class HomeoNode(Node):
         """``path`` (a parameter's value) inside the data directory, or ``OutsideDataDir``."""
         return data_dir.resolve(self._data_dir, path, what)
 
-    def _guard_data_dir(self, params):
+    def declare_fixed(self, name: str, default, descriptor):
+        """A parameter that takes effect at start only. Not ``read_only``: ``ros2 param load`` of a
+        ``ros2 param dump`` sets every parameter, and a read-only one fails even with its own value."""
+        value = self.declare_parameter(name, default, descriptor).value
+        self._fixed[name] = value
+        return value
+
+    def _guard_fixed(self, params):
         from rcl_interfaces.msg import SetParametersResult
 
         for prm in params:
-            if prm.name == "data_dir" and prm.value != self._data_dir:
-                return SetParametersResult(successful=False, reason="data_dir is set when the node starts")
+            if prm.name in self._fixed and prm.value != self._fixed[prm.name]:
+                return SetParametersResult(successful=False,
+                                           reason=f"{prm.name} is set when the node starts (restart it to change it)")
         return SetParametersResult(successful=True)
 
     # -- topics ---------------------------------------------------------------------

@@ -54,16 +54,15 @@ class SimNode(ScenarioNode):
         self.declare_parameter("trace_path", "", d(description="write one JSON line per tick here ('' = no trace)"))
         self.declare_parameter("wait_for_readers", True, d(description="start only when the graph's readers and "
                                                            "writers have matched"))
-        self.declare_parameter("extra_readers", 0, d(
+        self.declare_fixed("extra_readers", 0, d(
             description="readers beyond the graph's to wait for on every topic before tick 0 (a recorder, a live "
-                        "view): so that they miss nothing of the run", read_only=True,
+                        "view): so that they miss nothing of the run",
             integer_range=[IntegerRange(from_value=0, to_value=100, step=1)]))
-        self.declare_parameter("intention_accuracy", False, d(
+        self.declare_fixed("intention_accuracy", False, d(
             description="score the recognised intention of each action against the human's (bayes mode); the "
-                        "intention node then learns from the outcome, so the gate waits for its reader too",
-            read_only=True))
-        self.declare_parameter("human", SIM_HUMAN, d(description="who plays the human: the simulated one (sim) or a "
-                                                     "person on homeo/human_input (person)", read_only=True))
+                        "intention node then learns from the outcome, so the gate waits for its reader too"))
+        self.declare_fixed("human", SIM_HUMAN, d(description="who plays the human: the simulated one (sim) or a "
+                                                     "person on homeo/human_input (person)"))
         self.declare_parameter("human_timeout", 10.0, d(
             description="seconds a tick waits for the person before it counts as no intention (no answer)",
             floating_point_range=[FloatingPointRange(from_value=0.01, to_value=3600.0)]))
