@@ -342,47 +342,64 @@ def short(text: str, limit: int = MAX_REASON) -> str:
     return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
-def _parse_int(digits: str) -> int:
-    if len(digits.lstrip("-")) > MAX_INT_DIGITS:
-        raise Rejected(f"an integer of {len(digits.lstrip('-'))} digits (at most {MAX_INT_DIGITS})")
-    return int(digits)
-
-
-def _parse_float(text: str) -> float:
-    if len(text) > 64:
-        raise Rejected(f"a number of {len(text)} characters")
-    v = float(text)
-    if not math.isfinite(v):
-        raise Rejected(f"number {text[:24]} is out of range")
-    return v
-
-
 def _parse_constant(name: str):
     raise Rejected(f"{name} is not JSON (use null)")
 
 
-def _check_tree(value: Any) -> None:
-    """Depth, string length, number of values and encodable text of a parsed JSON value."""
+_INT_LIMIT = 10 ** MAX_INT_DIGITS
+
+
+def _check_tree(value: Any, text: str) -> None:
+    """Depth, number of values, string length, integer size and finite numbers of ``value``,
+    parsed from ``text``. The text's length says whether a string or the count can break a limit
+    (parse hooks per number would cost three times the parse)."""
+    strings = len(text) > MAX_STR
+    count = text.count(",") + text.count(":") + 1 >= MAX_ITEMS  # a bound on the number of values
+    n = 0
     stack = [(value, 1)]
-    count = 0
     while stack:
         v, depth = stack.pop()
-        count += 1
-        if count > MAX_ITEMS:
-            raise Rejected(f"more than {MAX_ITEMS} values")
-        if isinstance(v, str):
-            if len(v) > MAX_STR:
-                raise Rejected(f"a string of {len(v)} characters (at most {MAX_STR})")
-        elif isinstance(v, (dict, list)):
+        t = type(v)
+        if t is dict or t is list:
             if depth > MAX_DEPTH:
                 raise Rejected(f"nested deeper than {MAX_DEPTH}")
-            if isinstance(v, dict):
-                for k, x in v.items():
-                    if len(k) > MAX_STR:
-                        raise Rejected(f"a key of {len(k)} characters (at most {MAX_STR})")
-                    stack.append((x, depth + 1))
+            if t is dict:
+                if strings:
+                    for k in v:
+                        if len(k) > MAX_STR:
+                            raise Rejected(f"a key of {len(k)} characters (at most {MAX_STR})")
+                items = v.values()
             else:
-                stack.extend((x, depth + 1) for x in v)
+                items = v
+            if count:
+                n += len(v)
+                if n > MAX_ITEMS:
+                    raise Rejected(f"more than {MAX_ITEMS} values")
+            for x in items:
+                tx = type(x)
+                if tx is dict or tx is list:
+                    stack.append((x, depth + 1))
+                elif tx is str:
+                    if strings and len(x) > MAX_STR:
+                        raise Rejected(f"a string of {len(x)} characters (at most {MAX_STR})")
+                elif tx is float:
+                    if x - x != 0.0:  # inf (1e999 parses to it) or nan
+                        raise Rejected("a number out of range")
+                elif tx is int and not -_INT_LIMIT < x < _INT_LIMIT:
+                    _check_number(x)
+        elif t is str:
+            if len(v) > MAX_STR:
+                raise Rejected(f"a string of {len(v)} characters (at most {MAX_STR})")
+        elif t is int or t is float:
+            _check_number(v)
+
+
+def _check_number(x) -> None:
+    if type(x) is float:
+        if x - x != 0.0:  # inf (1e999 parses to it) or nan
+            raise Rejected("a number out of range")
+    elif not -_INT_LIMIT < x < _INT_LIMIT:
+        raise Rejected(f"an integer of {len(str(abs(x)))} digits (at most {MAX_INT_DIGITS})")
 
 
 def parse_json(text, limit: int = MAX_TEXT, what: str = "") -> Any:
@@ -396,14 +413,16 @@ def parse_json(text, limit: int = MAX_TEXT, what: str = "") -> Any:
     if "\\u" in text and _SURROGATE.search(text):
         raise Rejected("a \\u escape of a surrogate (send the character itself)")
     try:
-        value = json.loads(text, parse_int=_parse_int, parse_float=_parse_float, parse_constant=_parse_constant)
+        value = json.loads(text, parse_constant=_parse_constant)
     except Rejected:
         raise
     except RecursionError:  # the parser's own limit (about 1000 levels)
         raise Rejected(f"nested deeper than {MAX_DEPTH}") from None
-    except ValueError as exc:  # JSONDecodeError is a ValueError
+    except ValueError as exc:  # JSONDecodeError is one; so is an integer of more than 4300 digits
+        if "digits" in str(exc):
+            raise Rejected(f"an integer of more than 4300 digits (at most {MAX_INT_DIGITS})") from None
         raise Rejected(short(f"not JSON ({exc.msg if hasattr(exc, 'msg') else exc})")) from None
-    _check_tree(value)
+    _check_tree(value, text)
     return value
 
 
