@@ -106,18 +106,22 @@ def test_a_stranger_cannot_crash_wedge_or_steer_the_graph(tmp_path):
     attacker.start()
     try:
         g = subprocess.run([sys.executable, "-m", "homeo_launch.cli", "sim", "--iterations", str(n), "--seed", str(seed),
-                            "--rate", "40", "--json", "--quiet", "--log-dir", str(tmp_path)], env=graph_env(d),
+                            # the flood costs CPU: on two busy cores a tick can wait many seconds while
+                            # the nodes discard it; a long timeout keeps slowness apart from loss
+                            "--rate", "40", "--action-timeout", "60", "--json", "--quiet", "--log-dir", str(tmp_path)],
+                           env=graph_env(d),
                            capture_output=True, text=True, timeout=300)
     finally:
         stop.set()
         attacker.join(30)
-    logs = {f.name: f.read_text()[-1500:] for f in tmp_path.glob("*.log")}
+    logs = {f.name: f.read_text()[-6000:] for f in tmp_path.glob("*.log")}
     assert g.returncode == 0, (g.stderr[-3000:], logs)
     assert sent[0] >= 10_000, f"only {sent[0]} hostile messages were sent"
     p = subprocess.run([sys.executable, "-m", "homeo_sim.cli", "run", "--iterations", str(n), "--seed", str(seed),
                         "--intention", "bayes", "--json", "--quiet"], capture_output=True, text=True, timeout=120)
     assert p.returncode == 0, p.stderr
-    assert g.stdout == p.stdout  # exactly the metrics of the same run without the attack
+    sim_log = [ln for ln in logs.get("homeo_sim.log", "").splitlines() if "no action" in ln or "missed" in ln]
+    assert g.stdout == p.stdout, sim_log  # exactly the metrics of the same run without the attack
 
 
 @pytest.mark.parametrize("auth", [True, False])
