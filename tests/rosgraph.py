@@ -104,7 +104,7 @@ def sim_graph(opts, domain: int):
     from homeo_launch.processes import Graph, graph_env
     from homeo_launch.sim import sim_specs
 
-    g = Graph(sim_specs(opts), graph_env(domain))
+    g = Graph(sim_specs(opts), graph_env(domain), namespace=opts.namespace, auth=opts.auth)
     g.start()
     try:
         yield g

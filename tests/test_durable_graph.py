@@ -27,6 +27,7 @@ MODULES = {"homeo_decision": "homeo_decision.node", "homeo_intention": "homeo_in
 
 
 def _launch(*args, domain: int) -> subprocess.Popen:
+    """``homeo-launch sim`` with its data directory the test's own (the checkpoint folder is in it)."""
     return subprocess.Popen([sys.executable, "-m", "homeo_launch.cli", "sim", "--quiet", *args],
                             env=graph_env(domain), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
@@ -87,7 +88,7 @@ def test_a_node_killed_mid_run_is_restarted_from_its_checkpoint_and_the_run_comp
     d = fresh_domain()
     probe = Probe(d)
     diag = probe.diagnostics()
-    p = _launch("--iterations", str(n), "--rate", "50", "--action-timeout", "1", "--checkpoint-dir", str(ck_dir),
+    p = _launch("--data-dir", str(tmp_path), "--iterations", str(n), "--rate", "50", "--action-timeout", "1", "--checkpoint-dir", str(ck_dir),
                 "--checkpoint-every", "50", "--log-dir", str(logs), "--json", domain=d)
     try:
         path = ck_dir / f"{node}.json"
@@ -124,7 +125,7 @@ def test_a_node_killed_mid_run_is_restarted_from_its_checkpoint_and_the_run_comp
 
 
 def test_a_node_that_keeps_dying_stops_the_graph_with_one_line(tmp_path):
-    p = _launch("--iterations", "0", "--rate", "50", "--checkpoint-dir", str(tmp_path / "ck"), "--max-restarts", "1",
+    p = _launch("--data-dir", str(tmp_path), "--iterations", "0", "--rate", "50", "--checkpoint-dir", str(tmp_path / "ck"), "--max-restarts", "1",
                 domain=fresh_domain())
     try:
         end = time.monotonic() + 120
@@ -151,6 +152,7 @@ def test_resume_continues_the_schedule_and_ctrl_c_saves_q(tmp_path):
     d = fresh_domain()
     ck = tmp_path / "ck"
     r = subprocess.run([sys.executable, "-m", "homeo_launch.cli", "sim", "--quiet", "--json", "--iterations", "1000",
+                        "--data-dir", str(tmp_path),
                         "--checkpoint-dir", str(ck)], env=graph_env(d), capture_output=True, text=True, timeout=240)
     assert r.returncode == 0, r.stderr[-2000:]
     first = json.loads((ck / "homeo_decision.json").read_text())
@@ -159,7 +161,7 @@ def test_resume_continues_the_schedule_and_ctrl_c_saves_q(tmp_path):
     q = tmp_path / "q.json"
     probe = Probe(d)
     actions = probe.collect("/homeo/action")
-    p = _launch("--iterations", "0", "--rate", "100", "--resume", str(ck), "--save-q", str(q), domain=d)
+    p = _launch("--data-dir", str(tmp_path), "--iterations", "0", "--rate", "100", "--resume", str(ck), "--save-q", str(q), domain=d)
     try:
         # spin the probe meanwhile: it takes in the actions as they come
         # (the probe may match the decision's writer late on a loaded machine: count what it hears)
@@ -184,7 +186,8 @@ def test_resume_continues_the_schedule_and_ctrl_c_saves_q(tmp_path):
     bad = tmp_path / "bad"
     bad.mkdir()
     (bad / "homeo_decision.json").write_text("{")
-    r = subprocess.run([sys.executable, "-m", "homeo_launch.cli", "sim", "--resume", str(bad)], env=graph_env(d),
+    r = subprocess.run([sys.executable, "-m", "homeo_launch.cli", "sim", "--data-dir", str(tmp_path),
+                        "--resume", str(bad)], env=graph_env(d),
                        capture_output=True, text=True, timeout=60)
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and "corrupt checkpoint" in r.stderr, r.stderr
 
@@ -193,7 +196,7 @@ def test_the_drives_node_killed_mid_run_is_restarted_and_the_run_completes(tmp_p
     """The drives node learns nothing (no checkpoint): restarted, it perceives from the scenario's
     initial drives again and the run goes on."""
     n = 400
-    p = _launch("--iterations", str(n), "--rate", "50", "--action-timeout", "1", "--checkpoint-dir",
+    p = _launch("--data-dir", str(tmp_path), "--iterations", str(n), "--rate", "50", "--action-timeout", "1", "--checkpoint-dir",
                 str(tmp_path / "ck"), "--checkpoint-every", "50", "--json", domain=fresh_domain())
     try:
         _wait_ticks(tmp_path / "ck" / "homeo_decision.json", 100, p)

@@ -44,7 +44,8 @@ def test_launcher_prints_exactly_the_in_process_metrics_and_the_same_actions(tmp
     n, seed = 300, 4
     d = fresh_domain()
     g = _cli("homeo_launch.cli", "sim", "--iterations", str(n), "--seed", str(seed), "--json", "--quiet",
-             "--intention", intention, "--trace", str(tmp_path / "graph.jsonl"), domain=d)
+             "--intention", intention, "--trace", str(tmp_path / "graph.jsonl"), "--data-dir", str(tmp_path),
+             domain=d)
     assert g.returncode == 0, g.stderr
     p = _cli("homeo_sim.cli", "run", "--iterations", str(n), "--seed", str(seed), "--json", "--quiet",
              "--intention", intention, "--trace", str(tmp_path / "proc.jsonl"), domain=d)
@@ -95,7 +96,7 @@ def test_save_reset_and_load_the_q_table_through_the_services(tmp_path):
 
     d = fresh_domain()
     q1, q_empty, q2 = (str(tmp_path / f) for f in ("q1.json", "empty.json", "q2.json"))
-    with sim_graph(SimOptions(iterations=150, save_q=q1), d):
+    with sim_graph(SimOptions(iterations=150, save_q=q1, data_dir=str(tmp_path)), d):
         probe = Probe(d)
         try:
             status = probe.collect("/homeo/run_status")
@@ -115,6 +116,17 @@ def test_save_reset_and_load_the_q_table_through_the_services(tmp_path):
             assert probe.set_param("/homeo_decision", "q_table_path", str(tmp_path / "missing.json")).successful
             r = call("load_q")
             assert not r.success and "not found" in r.message
+            # paths outside the data directory are refused, whoever sets them
+            for outside in ("/etc/passwd", str(tmp_path / ".." / "q.json"), "../q.json"):
+                res = probe.set_param("/homeo_decision", "q_table_path", outside)
+                assert not res.successful and "outside the data directory" in res.reason, (outside, res.reason)
+            # a save that fails is a failed response, the node lives on, and no temporary file stays
+            (tmp_path / "adir").mkdir()
+            assert probe.set_param("/homeo_decision", "q_table_path", "adir").successful
+            r = call("save_q")
+            assert not r.success and "is a directory" in r.message, r.message
+            assert call("reset").success  # still answering
+            assert not list(tmp_path.rglob("*.tmp"))
         finally:
             probe.close()
     for path in (q1, q_empty, q2):
@@ -150,7 +162,8 @@ def test_garbage_on_every_input_topic_is_rejected_and_reported_while_the_run_goe
         "/homeo/intention": ["homeo_drives"], "/homeo/outcome": ["homeo_drives"],
     }
     d = fresh_domain()
-    with sim_graph(SimOptions(iterations=0, rate=50.0), d):
+    # without authentication: every message reaches the decoder (with it, all are refused unsigned)
+    with sim_graph(SimOptions(iterations=0, rate=50.0, auth=False), d):
         probe = Probe(d)
         try:
             status = probe.collect("/homeo/run_status")

@@ -54,7 +54,12 @@ def _action(**over):
     (_action(action="Dance"), "unknown action 'Dance'"),
     (_action(tick=-1), "tick = -1 is below 0"),
     (_action(tick="3"), "tick must be an integer"),
-    (_action(tau=float("inf")), "tau"),
+    (_action(tau=float("inf")), "Infinity is not JSON"),
+    (_action(tau=1e308 * 10 if False else 1.0).replace("1.0}", "1e400}"), "out of range"),
+    (_action(tau=10 ** 400), "integer of 401 digits"),
+    (_action(schema=[]), "unknown schema"),
+    (_action(schema={}), "unknown schema"),
+    ('{"\\ud800": 1}', "surrogate"),
     (_action(extra=1), "unexpected field 'extra'"),
     (json.dumps({"schema": "homeo/action", "version": 1, "run": 0, "tick": 0, "stamp": 1.0}), "missing field 'action'"),
 ])
@@ -117,12 +122,37 @@ def test_join_rejects_stale_future_and_duplicate_ticks_and_follows_a_new_run():
         j.put("world", _m(50))
     j2 = TickJoin({"world": 0, "intention": 0})
     j2.put("world", _m(0))
-    with pytest.raises(Rejected, match="duplicate world"):
-        j2.put("world", _m(0))
+    assert j2.put("world", _m(0)) == []  # an exact repeat (a resent tick) is a no-op
+    with pytest.raises(Rejected, match="a different world for tick 0"):
+        j2.put("world", Message("x", 0, 0, 0.0, {"other": 1}))
     # a reset of the simulation: run 1 starts again at tick 0
     assert [k for k, _ in j.put("world", _m(0, run=1))] == [0]
     with pytest.raises(Rejected, match="stale run 0"):
         j.put("world", _m(1, run=0))
+
+
+def test_join_takes_a_new_run_only_at_its_first_tick():
+    j = TickJoin({"world": 0})
+    j.put("world", _m(0))
+    for run, tick in ((1, 5), (2, 0), (10**12, 0)):  # not the next run's start: refused, nothing changes
+        with pytest.raises(Rejected, match="not the start of the next run"):
+            j.put("world", _m(tick, run=run))
+    assert (j.run, j.expected) == (0, 1)
+    assert [k for k, _ in j.put("world", _m(1))] == [1]  # the real run goes on
+
+
+def test_a_fresh_join_takes_the_run_where_it_is():
+    j = TickJoin({"world": 0, "outcome": -1})  # a node restarted mid-run
+    assert j.put("world", _m(40, run=3)) == []
+    assert [k for k, _ in j.put("outcome", _m(39, run=3))] == [40]
+
+
+def test_a_tick_whose_input_was_lost_is_skipped_once_a_later_tick_is_whole():
+    j = TickJoin({"world": 0, "intention": 0})
+    j.put("intention", _m(0))  # world(0) is lost on the way
+    assert j.put("world", _m(1)) == []
+    done = j.put("intention", _m(1))
+    assert [k for k, _ in done] == [1] and j.skipped == 1 and j.expected == 2
 
 
 def test_reject_log_reports_counts_and_last_reason():

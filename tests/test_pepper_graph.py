@@ -190,7 +190,7 @@ def test_field_test_through_the_graph_matches_the_in_process_driver(tmp_path):
 
     q = {"dedicated": str(train_q(tmp_path / "qd.json", 0.25)), "selfish": str(train_q(tmp_path / "qs.json", 0.0))}
     r = subprocess.run([sys.executable, "-c", LAUNCH, "pepper", "--field", "--script", "field_user.json", "--seed", "0",
-                        "--q-dedicated", q["dedicated"], "--q-selfish", q["selfish"], "--json"],
+                        "--q-dedicated", q["dedicated"], "--q-selfish", q["selfish"], "--json", "--data-dir", str(tmp_path)],
                        env=graph_env(fresh_domain()), capture_output=True, text=True, timeout=150)
     assert r.returncode == 0, r.stderr[-2000:]
     robots = json.loads(r.stdout)["robots"]

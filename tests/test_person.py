@@ -107,7 +107,8 @@ def test_a_person_drives_the_graph_praise_proposal_and_silence(tmp_path, thesis)
 
     d = fresh_domain()
     q_file = tmp_path / "q.json"
-    opts = SimOptions(iterations=3, intention="oracle", human="person", human_timeout=1.5, save_q=str(q_file))
+    opts = SimOptions(iterations=3, intention="oracle", human="person", human_timeout=1.5, save_q=str(q_file),
+                      data_dir=str(tmp_path))
     with sim_graph(opts, d):
         probe = Probe(d)
         try:

@@ -36,7 +36,7 @@ def recorded(tmp_path_factory):
     d = tmp_path_factory.mktemp("rec")
     bag = d / "bag"
     p = _run("homeo_launch.cli", "sim", "--iterations", TICKS, "--seed", SEED, "--json", "--quiet",
-             "--record", bag, "--save-q", d / "q.json", env=graph_env(fresh_domain()))
+             "--record", bag, "--save-q", d / "q.json", "--data-dir", d, env=graph_env(fresh_domain()))
     assert p.returncode == 0, p.stderr
     return bag, p.stdout, d
 

@@ -29,9 +29,8 @@ class DrivesNode(ScenarioNode):
     def __init__(self):
         super().__init__(DESC.name)
         self.host = PerceptionHost(self.sc)
-        self.declare_parameter("supervised", False, ParameterDescriptor(
-            description="restarted nodes rejoin the run: skip a gap of ticks", read_only=True))
-        if self.get_parameter("supervised").value:
+        if self.declare_fixed("supervised", False, ParameterDescriptor(
+                description="restarted nodes rejoin the run: skip a gap of ticks")):
             make_rejoinable(self.host.stage)  # an upstream node that died must not wedge this one
         self.pub = self.publisher("drives")
         for i in DESC.inputs:

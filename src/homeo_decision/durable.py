@@ -18,6 +18,7 @@ import os
 
 from rcl_interfaces.msg import IntegerRange, ParameterDescriptor
 
+from homeo_msgs_py.data_dir import OutsideDataDir
 from homeo_msgs_py.node_base import NodeConfigError
 from homeo_msgs_py.rejoin import make_rejoinable
 
@@ -27,18 +28,24 @@ DEFAULT_EVERY = 100
 
 
 def declare(node) -> dict:
-    """Declare the parameters; returns their values."""
-    ro = lambda text: ParameterDescriptor(description=text, read_only=True)  # noqa: E731
-    node.declare_parameter("supervised", False, ro("restarted nodes rejoin the run: skip a gap of ticks"))
-    node.declare_parameter("checkpoint_dir", "", ro("write the learned state here ('' = never)"))
-    node.declare_parameter("checkpoint_every", DEFAULT_EVERY, ParameterDescriptor(
-        description="ticks between checkpoints", read_only=True,
-        integer_range=[IntegerRange(from_value=1, to_value=10**9, step=1)]))
-    node.declare_parameter("resume_dir", "", ro("start from the checkpoint in this folder ('' = from scratch)"))
-    node.declare_parameter("respawned", False, ro("replaces a node of this run that died"))
-    node.declare_parameter("session", "", ro("the launch's id, written into each checkpoint"))
-    return {n: node.get_parameter(n).value for n in ("supervised", "checkpoint_dir", "checkpoint_every",
-                                                    "resume_dir", "respawned", "session")}
+    """Declare the parameters (set at start: ``HomeoNode.declare_fixed``); returns their values, the
+    folders resolved inside the node's data directory (``homeo_msgs_py.data_dir``)."""
+    d = lambda text: ParameterDescriptor(description=text)  # noqa: E731
+    cfg = {
+        "supervised": node.declare_fixed("supervised", False, d("restarted nodes rejoin the run: skip a gap of ticks")),
+        "checkpoint_dir": node.declare_fixed("checkpoint_dir", "", d("write the learned state here ('' = never)")),
+        "checkpoint_every": node.declare_fixed("checkpoint_every", DEFAULT_EVERY, ParameterDescriptor(
+            description="ticks between checkpoints", integer_range=[IntegerRange(from_value=1, to_value=10**9, step=1)])),
+        "resume_dir": node.declare_fixed("resume_dir", "", d("start from the checkpoint in this folder ('' = from scratch)")),
+        "respawned": node.declare_fixed("respawned", False, d("replaces a node of this run that died")),
+        "session": node.declare_fixed("session", "", d("the launch's id, written into each checkpoint")),
+    }
+    for key in ("checkpoint_dir", "resume_dir"):
+        try:
+            cfg[key] = node.data_path(cfg[key], key)
+        except OutsideDataDir as exc:
+            raise NodeConfigError(str(exc)) from None
+    return cfg
 
 
 def setup_stage(node, stage, cfg: dict) -> None:

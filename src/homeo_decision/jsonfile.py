@@ -14,9 +14,11 @@ def write_atomic(path: str | Path, obj, error: type[Exception], what: str) -> No
     The temporary file is removed on any failure, Ctrl-C included; only SIGKILL between its creation
     and the rename can leave one behind (``*.tmp``, never under the target's name)."""
     p = Path(path)
-    data = json.dumps(obj, separators=(",", ":"))
     tmp = None
     try:
+        data = json.dumps(obj, separators=(",", ":"), allow_nan=False)
+        if p.is_dir():
+            raise IsADirectoryError(21, "is a directory")
         p.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=p.parent, prefix=f"{p.name}.", suffix=".tmp")
         with os.fdopen(fd, "w") as fh:
@@ -26,10 +28,10 @@ def write_atomic(path: str | Path, obj, error: type[Exception], what: str) -> No
         os.replace(tmp, p)
         tmp = None
         _fsync_dir(p.parent)  # and the rename itself survives a power loss
-    except OSError as exc:
-        raise error(f"cannot write {what} {p}: {exc.strerror or exc}") from None
+    except (OSError, ValueError) as exc:  # ValueError: a NaN, which JSON cannot hold
+        raise error(f"cannot write {what} {p}: {getattr(exc, 'strerror', None) or exc}") from None
     finally:
-        if tmp is not None:
+        if tmp is not None:  # a failed write leaves nothing behind
             try:
                 os.unlink(tmp)
             except OSError:

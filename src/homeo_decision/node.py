@@ -26,7 +26,8 @@ from pathlib import Path
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
 from std_srvs.srv import Trigger
 
-from homeo_msgs_py.graph import NODES
+from homeo_msgs_py.graph import NODES, SEED_MAX
+from homeo_msgs_py.data_dir import OutsideDataDir
 from homeo_msgs_py.node_base import NodeConfigError
 
 from . import checkpoint, durable, qtable_io
@@ -53,15 +54,18 @@ class DecisionNode(ScenarioNode):
                                ParameterDescriptor(description="learn from the user's proposals (Eq 3.23)"))
         self.declare_parameter("seed", 0, ParameterDescriptor(
             description="seed of the decision's random stream (setting it reseeds)",
-            integer_range=[IntegerRange(from_value=0, to_value=2**31 - 1, step=1)]))
+            integer_range=[IntegerRange(from_value=0, to_value=SEED_MAX, step=1)]))
         self.declare_parameter("q_table_path", "", ParameterDescriptor(description="Q-table file of ~/save_q, ~/load_q"))
-        self.declare_parameter("load_on_start", False, ParameterDescriptor(
-            description="load q_table_path when the node starts", read_only=True))
+        self.declare_fixed("load_on_start", False, ParameterDescriptor(
+            description="load q_table_path when the node starts"))
         p = lambda n: self.get_parameter(n).value  # noqa: E731
         self.core = DecisionCore(self.sc, p("seed"), dod=p("dod"), xi=p("xi"), gamma=p("gamma"),
                                  pseudo_update=p("pseudo_update"), feedback=p("feedback"))
         self.host = DecisionHost(self.sc, self.core)
-        self.q_path = p("q_table_path")
+        try:
+            self.q_path = self.data_path(p("q_table_path"), "q_table_path")
+        except OutsideDataDir as exc:
+            raise NodeConfigError(str(exc)) from None
         if p("load_on_start"):
             ok, msg = self._load()
             if not ok:
@@ -87,7 +91,13 @@ class DecisionNode(ScenarioNode):
     # -- parameters ---------------------------------------------------------------------
     def _on_params(self, params) -> SetParametersResult:
         kw = {}
+        q_path = self.q_path
         for prm in params:
+            if prm.name == "q_table_path":
+                try:
+                    q_path = self.data_path(prm.value, "q_table_path")
+                except OutsideDataDir as exc:
+                    return SetParametersResult(successful=False, reason=str(exc))
             if prm.name in ("dod", "xi", "gamma"):
                 kw[prm.name] = prm.value
             elif prm.name in ("feedback", "pseudo_update"):
@@ -99,8 +109,7 @@ class DecisionNode(ScenarioNode):
         for prm in params:
             if prm.name == "seed":
                 self.core.reseed(prm.value)
-            elif prm.name == "q_table_path":
-                self.q_path = prm.value
+        self.q_path = q_path
         return SetParametersResult(successful=True)
 
     def _restore(self, ck: dict | None) -> None:
@@ -171,8 +180,8 @@ class DecisionNode(ScenarioNode):
         try:
             qtable_io.save(c.q, self.q_path, meta={"node": self.get_name(), "dod": c.dod, "xi": c.xi,
                                                    "pseudo_update": c.pseudo, "seed": c.seed})
-        except OSError as exc:
-            response.success, response.message = False, f"{self.q_path}: {exc.strerror or exc}"
+        except qtable_io.QTableError as exc:  # a directory, a read-only place, a full disk
+            response.success, response.message = False, str(exc)
             return response
         response.success, response.message = True, f"saved {self.q_path}"
         return response

@@ -17,21 +17,37 @@ from .scenario import ScenarioError, load_scenario
 class ScenarioNode(HomeoNode):
     def __init__(self, name: str, **kw):
         super().__init__(name, **kw)
-        self.declare_parameter("scenario", "", ParameterDescriptor(
-            description="scenario JSON file ('' = the thesis scenario); fixed at start", read_only=True))
-        self.declare_parameter("overrides", "{}", ParameterDescriptor(
-            description="JSON object of open-choice overrides, as homeo-sim --set; fixed at start", read_only=True))
+        self.declare_fixed("scenario", "", ParameterDescriptor(
+            description="scenario JSON file ('' = the thesis scenario); fixed at start"))
+        # KEY=VALUE items as homeo-sim --set (VALUE JSON or a word); '' items are ignored. A list of
+        # strings, not a JSON object: ros2 param load re-reads a string through YAML, and '{...}'
+        # would come back as a mapping
+        self.declare_fixed("overrides", [""], ParameterDescriptor(
+            description="open-choice overrides, KEY=VALUE items as homeo-sim --set; fixed at start"))
         self.sc = load_node_scenario(self.get_parameter("scenario").value, self.get_parameter("overrides").value)
         self.voc = vocabulary(self.sc)
 
 
-def load_node_scenario(path: str, overrides: str):
-    try:
-        ov = json.loads(overrides or "{}")
-    except json.JSONDecodeError as exc:
-        raise NodeConfigError(f"parameter overrides is not JSON: {exc}") from None
-    if not isinstance(ov, dict):
-        raise NodeConfigError("parameter overrides must be a JSON object")
+def overrides_param(overrides: dict) -> list[str]:
+    """The ``overrides`` parameter of a node for these open-choice overrides."""
+    return [f"{k}={json.dumps(v, separators=(',', ':'))}" for k, v in overrides.items()] or [""]
+
+
+def load_node_scenario(path: str, overrides):
+    from argparse import ArgumentTypeError
+
+    from homeo_msgs_py.cli_args import setting
+
+    ov = {}
+    for item in overrides or []:
+        if not isinstance(item, str):
+            raise NodeConfigError("parameter overrides must be a list of KEY=VALUE strings")
+        if item:
+            try:
+                k, v = setting(item)
+            except ArgumentTypeError as exc:
+                raise NodeConfigError(f"parameter overrides: {exc}") from None
+            ov[k] = v
     return load_scenario(path or None, overrides=ov)
 
 

@@ -19,12 +19,13 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from rcl_interfaces.msg import ParameterDescriptor
+from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from std_srvs.srv import Trigger
 
 from homeo_decision import checkpoint, durable
 from homeo_decision.node_runtime import ScenarioNode, run_scenario_node
 from homeo_msgs_py.graph import BAYES, INTENTION_MODES, NODES
+from homeo_msgs_py.data_dir import OutsideDataDir
 from homeo_msgs_py.node_base import NodeConfigError
 from homeo_msgs_py.schemas import Rejected
 
@@ -37,12 +38,17 @@ DESC = NODES["homeo_intention"]
 class IntentionNode(ScenarioNode):
     def __init__(self):
         super().__init__(DESC.name)
-        self.declare_parameter("mode", BAYES, ParameterDescriptor(
-            description=f"recognition mode: {', '.join(INTENTION_MODES)}", read_only=True))
+        self.declare_fixed("mode", BAYES, ParameterDescriptor(
+            description=f"recognition mode: {', '.join(INTENTION_MODES)} (set at start)"))
         self.declare_parameter("model_path", "", ParameterDescriptor(description="model file of ~/save_model, ~/load_model"))
-        self.declare_parameter("load_on_start", False, ParameterDescriptor(
-            description="load model_path when the node starts", read_only=True))
+        self.declare_fixed("load_on_start", False, ParameterDescriptor(
+            description="load model_path when the node starts"))
         mode = self.get_parameter("mode").value
+        try:
+            self.model_path = self.data_path(self.get_parameter("model_path").value, "model_path")
+        except OutsideDataDir as exc:
+            raise NodeConfigError(str(exc)) from None
+        self.add_on_set_parameters_callback(self._on_params)
         try:
             self.host = RecognitionHost(self.sc, mode)
             self.part = self.host.part
@@ -102,9 +108,18 @@ class IntentionNode(ScenarioNode):
             self.checkpoints.save()  # at shutdown (Ctrl-C, SIGTERM, the launcher's stop)
         return super().destroy_node()
 
+    def _on_params(self, params) -> SetParametersResult:
+        for prm in params:
+            if prm.name == "model_path":
+                try:
+                    self.model_path = self.data_path(prm.value, "model_path")
+                except OutsideDataDir as exc:
+                    return SetParametersResult(successful=False, reason=str(exc))
+        return SetParametersResult(successful=True)
+
     # -- services -------------------------------------------------------------------------
     def _path(self) -> str:
-        return self.get_parameter("model_path").value
+        return self.model_path
 
     def _load(self) -> tuple[bool, str]:
         if not self.part.learns:

@@ -29,7 +29,7 @@ def floor_s_per_tick(iterations: int, hops: int = HOPS, bound_s: float = 120.0) 
     specs = [NodeSpec(f"homeo_floor_{i}", "homeo_launch.floor_chain",
                       {"index": i, "hops": hops, "iterations": iterations},
                       args=["--ros-args", "-r", f"__node:=homeo_floor_{i}"]) for i in range(hops)]
-    graph = Graph(specs, graph_env())
+    graph = Graph(specs, graph_env(), auth=False)  # the floor: raw rclpy, nothing signed
     try:
         graph.start()
         end = time.monotonic() + bound_s
@@ -75,10 +75,13 @@ def cmd_bench(args) -> int:
     import statistics
 
     graph, oracle, floor, crit, rss, missed = [], [], [], [], [], 0
-    recorded = []
+    recorded, unsigned = [], []
     for r in range(args.rounds):
         st = run_graph(SimOptions(iterations=args.iterations), quiet=True)
         graph.append(st["elapsed_s"] / args.iterations)
+        if getattr(args, "compare_auth", False):
+            unsigned.append(run_graph(SimOptions(iterations=args.iterations, auth=False),
+                                      quiet=True)["elapsed_s"] / args.iterations)
         if getattr(args, "record", False):
             recorded.append(recorded_s_per_tick(args.iterations))
         oracle.append(run_graph(SimOptions(iterations=args.iterations, intention=ORACLE),
@@ -97,6 +100,10 @@ def cmd_bench(args) -> int:
         m = statistics.median(recorded)
         rec = {"recorded_s_per_tick": m, "record_ratio": m / g,
                "record_ratio_per_round": [a / b for a, b in zip(recorded, graph)]}
+    if unsigned:
+        u = statistics.median(unsigned)
+        rec.update(unsigned_s_per_tick=u, auth_ratio=g / u, unsigned_floor_ratio=u / f,
+                   auth_ratio_per_round=[a / b for a, b in zip(graph, unsigned)])
     out = {**rec, "graph_s_per_tick": g, "floor_s_per_tick": f, "ratio": g / f, "rss_mb": max(rss),
            "hops": HOPS, "rounds": args.rounds, "ratio_per_round": [a / b for a, b in zip(graph, floor)],
            "critical_path_floor_s_per_tick": c, "critical_path_ratio": g / c,
@@ -112,7 +119,11 @@ def cmd_bench(args) -> int:
         print(f"critical path only, {CRITICAL_HOPS} hops: {c * 1e3:7.3f} ms/tick, ratio {g / c:.2f}")
         print(f"oracle intention graph     : {o * 1e3:7.3f} ms/tick; Bayesian recognition costs x{g / o:.2f}")
         print(f"graph resident memory      : {max(rss):7.0f} MiB (4 node processes)")
-        if rec:
+        if unsigned:
+            print(f"graph without auth (--no-auth): {rec['unsigned_s_per_tick'] * 1e3:7.3f} ms/tick, ratio to the floor "
+                  f"{rec['unsigned_floor_ratio']:.2f}; signed / unsigned {rec['auth_ratio']:.3f} (per round: "
+                  f"{', '.join(f'{x:.3f}' for x in rec['auth_ratio_per_round'])})")
+        if recorded:
             print(f"graph recording a bag      : {rec['recorded_s_per_tick'] * 1e3:7.3f} ms/tick; with / without --record "
                   f"{rec['record_ratio']:.3f} (target <= 1.10; per round: "
                   f"{', '.join(f'{x:.3f}' for x in rec['record_ratio_per_round'])})")

@@ -8,11 +8,12 @@ import sys
 from homeo_decision.qtable_io import QTableError
 from homeo_decision.scenario import ScenarioError
 from homeo_msgs_py.cli_args import Parser, UserError, float_in, int_at_least, run_command, setting
-from homeo_msgs_py.graph import BAYES, INTENTION_MODES
+from homeo_msgs_py.graph import BAYES, INTENTION_MODES, SEED_MAX, TICKS_MAX
 
 from .durable_args import add_durable_options
 from .live_args import add_live_options
 from .monitor import GraphError
+from .processes import add_graph_options
 from .sim import PROG, cmd_sim
 
 
@@ -21,9 +22,9 @@ def build_parser() -> argparse.ArgumentParser:
     ap = Parser(prog=PROG, description="Start the homeostatic robot's ROS 2 node graph.")
     sub = ap.add_subparsers(dest="cmd", required=True, parser_class=Parser)
     s = sub.add_parser("sim", help="the graph with the simulated world and human; prints Table 4.5's metrics")
-    s.add_argument("--iterations", type=int_at_least(0), default=5000, help="ticks (0 = until Ctrl-C; default 5000)")
+    s.add_argument("--iterations", type=int_at_least(0, TICKS_MAX), default=5000, help="ticks (0 = until Ctrl-C; default 5000)")
     s.add_argument("--rate", type=float_in(0.0, 1000.0), default=0.0, help="ticks per second (0 = as fast as lockstep allows)")
-    s.add_argument("--seed", type=int_at_least(0), default=0, help="seed of every component (default 0)")
+    s.add_argument("--seed", type=int_at_least(0, SEED_MAX), default=0, help="seed of every component (default 0)")
     s.add_argument("--dod", type=float_in(0.0, 1.0), default=None, help="Degree of Dedication (Eq 3.27)")
     s.add_argument("--xi", type=float_in(0.0, 1000.0), default=None, help="motivation factor xi (Eq 3.20)")
     s.add_argument("--no-pseudo", action="store_true", help="switch off pseudo updates (Eq 3.23)")
@@ -47,6 +48,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--json", action="store_true", help="print the metrics as homeo-sim run --json does")
     s.add_argument("--quiet", action="store_true", help="no progress bar")
     add_live_options(s)
+    add_graph_options(s)
     add_durable_options(s, "sim")
     from .pepper import add_parser as add_pepper
 
@@ -56,6 +58,8 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--rounds", type=int_at_least(1), default=3, help="alternating graph/floor pairs (default 3)")
     b.add_argument("--record", action="store_true",
                    help="also time the graph recording a bag, and print the ratio with / without recording")
+    b.add_argument("--compare-auth", action="store_true",
+                   help="also time the graph without authentication (--no-auth), and print the ratio")
     b.add_argument("--json", action="store_true")
     from .soak import add_parser as add_soak
 

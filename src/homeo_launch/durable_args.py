@@ -6,14 +6,15 @@ import os
 
 from homeo_msgs_py.cli_args import UserError, int_at_least
 
-CHECKPOINT_ROOT = os.path.join("out", "checkpoints")
+CHECKPOINT_ROOT = "checkpoints"  # under --data-dir
 
 
 def add_durable_options(p, graph: str) -> None:
     g = p.add_argument_group("checkpoints and restarts")
     g.add_argument("--checkpoint-dir", metavar="DIR", default=None,
                    help=f"write the robot nodes' learned state here every --checkpoint-every ticks and at the end "
-                        f"(default: {os.path.join(CHECKPOINT_ROOT, graph)}, or the --resume folder)")
+                        f"(inside --data-dir; default: DATA_DIR/{CHECKPOINT_ROOT}/NAMESPACE or {graph}, or the --resume "
+                        f"folder)")
     g.add_argument("--checkpoint-every", metavar="N", type=int_at_least(1), default=100,
                    help="ticks between checkpoints (default 100)")
     g.add_argument("--no-checkpoints", action="store_true", help="write no checkpoints (a restarted node starts fresh)")
@@ -28,6 +29,14 @@ def durable_options(a, graph: str, sc, bayes: bool) -> dict:
     """SimOptions fields from the arguments; a resume folder that cannot be used is a UserError."""
     if a.no_checkpoints and a.checkpoint_dir:
         raise UserError("--checkpoint-dir and --no-checkpoints contradict each other")
+    from homeo_msgs_py.data_dir import OutsideDataDir, resolve
+
+    for opt, d in (("--checkpoint-dir", a.checkpoint_dir), ("--resume", a.resume)):
+        if d:
+            try:
+                resolve(a.data_dir, os.path.abspath(d), opt)
+            except OutsideDataDir as exc:
+                raise UserError(f"{exc} (give --data-dir, or a path under it)") from None
     if a.resume and getattr(a, "load_q", None):
         raise UserError("--resume and --load-q: the checkpoint holds the Q-table; give one of them")
     if a.resume:
@@ -35,7 +44,8 @@ def durable_options(a, graph: str, sc, bayes: bool) -> dict:
     if a.no_checkpoints:
         ck_dir = ""
     else:
-        ck_dir = a.checkpoint_dir or a.resume or os.path.join(CHECKPOINT_ROOT, graph)
+        ns = (getattr(a, "namespace", "") or "").strip("/").replace("/", "_")
+        ck_dir = a.checkpoint_dir or a.resume or os.path.join(a.data_dir, CHECKPOINT_ROOT, ns or graph)
         if os.path.exists(ck_dir) and not os.path.isdir(ck_dir):
             raise UserError(f"--checkpoint-dir {ck_dir}: not a directory")
     return {"checkpoint_dir": ck_dir, "checkpoint_every": a.checkpoint_every, "resume": a.resume,

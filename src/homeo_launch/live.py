@@ -17,7 +17,7 @@ import time
 
 import json
 
-from homeo_msgs_py.graph import TOPICS
+from homeo_msgs_py.graph import TOPICS, key_of
 
 from .tap import DIAG_KEY, Tapped, string_data
 
@@ -103,7 +103,7 @@ class FoxgloveSink:
 
         from homeo_msgs_py.qos import pub_qos
 
-        name = "/" + TOPICS["human_input"].name
+        name = next((n for n in self.channels if key_of(n) == "human_input"), "/" + TOPICS["human_input"].name)
         pub = node.create_publisher(String, name, pub_qos("human_input"))
 
         def forward(text: str) -> None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import time
 
-from homeo_msgs_py.graph import TOPICS
+from homeo_msgs_py.graph import TOPICS, own_endpoints
 
 from .processes import Graph
 
@@ -16,9 +16,11 @@ class GraphError(Exception):
 
 
 class Monitor:
-    """The launcher's own node: watches discovery, /homeo/run_status, and calls services."""
+    """The launcher's own node: watches discovery, /homeo/run_status, and calls services.
+    It lives in the graph's namespace, so relative names resolve as the nodes' do; with the
+    graph's ``signer`` it believes only run statuses its own graph signed."""
 
-    def __init__(self):
+    def __init__(self, namespace: str = "", signer=None):
         import rclpy
         from rclpy.signals import SignalHandlerOptions
         from std_msgs.msg import String
@@ -30,18 +32,21 @@ class Monitor:
 
         rclpy.init(signal_handler_options=SignalHandlerOptions.NO)  # Ctrl-C stays a KeyboardInterrupt here
         self.rclpy = rclpy
-        self.node = rclpy.create_node("homeo_launch")
+        self.namespace = namespace
+        self.node = rclpy.create_node("homeo_launch", namespace=namespace or "/")
         # one executor for the node's life: rclpy.spin_once(node) adds and removes the node every call
         self.executor = SingleThreadedExecutor()
         self.executor.add_node(self.node)
         self.status = None
+        self.rejected = 0  # run statuses not believed (unsigned, foreign, malformed)
         voc = Vocabulary()
 
         def on_status(msg: String) -> None:
             try:
-                self.status = decode(msg.data, voc, "homeo/run_status")
+                self.status = decode(msg.data if signer is None else signer.verify(msg.data), voc,
+                                     "homeo/run_status")
             except Rejected:
-                pass
+                self.rejected += 1
 
         self.node.create_subscription(String, TOPICS["run_status"].name, on_status, sub_qos("run_status"))
 
@@ -49,11 +54,16 @@ class Monitor:
         self.executor.spin_once(timeout_sec=timeout)
 
     def missing(self, nodes, endpoints) -> list[str]:
-        present = set(self.node.get_node_names())
+        """What of the graph is not up yet: its nodes, and the writers and readers of each topic
+        that belong to them (another program's endpoints on the domain do not count)."""
+        ns = self.namespace or "/"
+        present = {n for n, space in self.node.get_node_names_and_namespaces() if space == ns}
         out = [f"node {n}" for n in nodes if n not in present]
+        mine = set(nodes)
         for key, (w, r) in endpoints.items():
-            topic = TOPICS[key].name
-            nw, nr = self.node.count_publishers(topic), self.node.count_subscribers(topic)
+            topic = self.node.resolve_topic_name(TOPICS[key].name)
+            nw = own_endpoints(self.node.get_publishers_info_by_topic(topic), mine, ns)
+            nr = own_endpoints(self.node.get_subscriptions_info_by_topic(topic), mine, ns)
             if nw < w:
                 out.append(f"{topic}: {nw}/{w} writers")
             if nr < r:

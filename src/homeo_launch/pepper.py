@@ -36,7 +36,7 @@ from pathlib import Path
 from homeo_msgs_py import graph as G
 from homeo_msgs_py.cli_args import UserError, float_in, int_at_least
 
-from .processes import Graph, NodeSpec, dds_defaults, graph_env
+from .processes import Graph, NodeSpec, add_graph_options, dds_defaults, graph_env
 from .sim import DISCOVERY_TIMEOUT_S, PROG, GraphError, Monitor
 from .supervise import Supervisor
 from .supervise import wait_until_up as supervised_wait
@@ -230,8 +230,11 @@ def scenario_file(path: str | None, out_dir: Path, continue_schedule: bool) -> s
 def pepper_specs(*, url: str, scenario: str, overrides: dict, seed: int, dod: float | None, q_table: str | None,
                  interactions: int, collect_window: float, collect_quiet: float, action_timeout: float,
                  end_with_script: bool, user: str = "", password: str = "", config: str = "",
-                 intention: str = "cues", extra_readers: int = 0, durable: dict | None = None) -> list[NodeSpec]:
-    common = {"scenario": scenario, "overrides": json.dumps(overrides)}
+                 intention: str = "cues", extra_readers: int = 0, data_dir: str = "out",
+                 durable: dict | None = None) -> list[NodeSpec]:
+    from homeo_decision.node_runtime import overrides_param
+
+    common = {"scenario": scenario, "overrides": overrides_param(overrides), "data_dir": os.path.abspath(data_dir)}
     decision = dict(common, seed=seed)
     if dod is not None:
         decision["dod"] = float(dod)
@@ -255,26 +258,26 @@ def pepper_specs(*, url: str, scenario: str, overrides: dict, seed: int, dod: fl
 
 def run_pepper_graph(specs: list[NodeSpec], log_dir: Path, standin: StandinProcess | None = None, on_row=None,
                      last: dict | None = None, discovery_timeout: float = DISCOVERY_TIMEOUT_S,
-                     env: dict | None = None, intention: str = "cues", sinks=(), max_restarts: int = 0,
-                     checkpoint_dir: str = "", quiet: bool = False) -> dict:
+                     env: dict | None = None, intention: str = "cues", sinks=(), namespace: str = "",
+                     auth: bool = True, max_restarts: int = 0, checkpoint_dir: str = "", quiet: bool = False) -> dict:
     """Run the bridge graph until the bridge reports done; returns its last run status fields.
     Raises GraphError (a node or the stand-in died, or the graph never came up) or KeyboardInterrupt.
     ``sinks``: as for ``sim.run_graph``; the robot nodes start first and the bridge waits for the
     tap on homeo/outcome (``outcome_readers``); its other topics are heard before its first
     interaction, which collects the user's expression first."""
     os.environ.update(dds_defaults())
-    graph = Graph(specs, env or graph_env(), str(log_dir))
+    graph = Graph(specs, env or graph_env(), str(log_dir), namespace=namespace, auth=auth)
     mon = tap = None
     shown = 0
     try:
-        mon = Monitor()
+        mon = Monitor(graph.namespace, graph.signer)
         sup = Supervisor(graph, mon.node, max_restarts, os.path.abspath(checkpoint_dir) if checkpoint_dir else "",
                          log=(lambda text: None) if quiet else None)
         if sinks:
             from .sim import start_robot_first
             from .tap import Tap
 
-            tap = Tap(mon.node, sinks)
+            tap = Tap(mon.node, sinks, signer=graph.signer)
             start_robot_first(graph, mon, tap, discovery_timeout)
         graph.start()
         _wait_up(graph, mon, standin, endpoints(intention), discovery_timeout, sup)
@@ -307,6 +310,7 @@ def run_pepper_graph(specs: list[NodeSpec], log_dir: Path, standin: StandinProce
         if mon is not None:
             mon.close()
         graph.stop()
+        graph.close()
 
 
 def _wait_up(graph, mon, standin, endpoints, bound, sup) -> None:
@@ -365,10 +369,11 @@ def run_robot(a, label: str, dod: float | None, q_table: str | None, log_dir: Pa
                              collect_quiet=a.collect_quiet, action_timeout=a.action_timeout,
                              end_with_script=bool(a.standin and script), user=a.user or "",
                              password=a.password or "", config=a.config or "", intention=a.intention,
-                             extra_readers=1 if sinks else 0, durable=durable)
+                             extra_readers=1 if sinks else 0, data_dir=a.data_dir, durable=durable)
         status = run_pepper_graph(specs, log_dir, standin, on_row=on_row, last=last, intention=a.intention,
-                                  sinks=sinks, max_restarts=durable["max_restarts"],
-                                  checkpoint_dir=durable["checkpoint_dir"], quiet=getattr(a, "quiet", False))
+                                  sinks=sinks, namespace=a.namespace, auth=not a.no_auth,
+                                  max_restarts=durable["max_restarts"], checkpoint_dir=durable["checkpoint_dir"],
+                                  quiet=getattr(a, "quiet", False))
         user_log = standin.user_log() if standin is not None else []
         return {"label": label, "dod": dod, "status": status, "user_log": user_log}
     finally:
@@ -428,9 +433,9 @@ def add_parser(subparsers) -> None:
     p.add_argument("--intention", choices=tuple(INTENTION_MODES), default="cues",
                    help="cues (default): the config's keyword/gesture cues name the intention (the intention node in "
                         "oracle mode; as homeo-pepper-field); bayes: the Bayesian recogniser on the raw cues")
-    p.add_argument("--interactions", type=int_at_least(0), default=0,
+    p.add_argument("--interactions", type=int_at_least(0, G.TICKS_MAX), default=0,
                    help="interactions (0 = until the script ends, or Ctrl-C on a robot)")
-    p.add_argument("--seed", type=int_at_least(0), default=0, help="seed of the decision node and the stand-in")
+    p.add_argument("--seed", type=int_at_least(0, G.SEED_MAX), default=0, help="seed of the decision node and the stand-in")
     p.add_argument("--time-scale", type=float_in(0.0, 1000.0), default=0.0,
                    help="stand-in: simulated seconds per wall second (default 0: each action lasts 10 s, reproducible)")
     p.add_argument("--collect-window", type=float_in(0.0, 600.0), default=None,
@@ -448,6 +453,7 @@ def add_parser(subparsers) -> None:
                    "homeo-sim run --iterations 5000 --seed 0)")
     p.add_argument("--q-selfish", metavar="FILE", help="--field: the selfish robot's Q-table (default: trained at DoD 0)")
     p.add_argument("--log-dir", metavar="DIR", help="keep each node's log here (default: a temporary directory)")
+    add_graph_options(p)
     p.add_argument("--json", action="store_true", help="print the interaction log as JSON")
     p.add_argument("--quiet", action="store_true", help="no per-interaction progress on stderr")
     from .durable_args import add_durable_options
@@ -473,9 +479,9 @@ def _check_args(a) -> None:
         check_new_bag(a.record)
     if (a.q_dedicated or a.q_selfish) and not a.field:
         raise UserError("--q-dedicated / --q-selfish go with --field")
-    for f in (a.q_table, a.q_dedicated, a.q_selfish):
-        if f and not os.path.isfile(f):
-            raise UserError(f"Q-table file not found: {f}")
+    from .sim import check_files
+
+    check_files(a, read=[("--q-table", a.q_table), ("--q-dedicated", a.q_dedicated), ("--q-selfish", a.q_selfish)])
     if a.script:
         _script_path(a.script)
     if a.config and not os.path.isfile(a.config):
@@ -616,7 +622,7 @@ def _field_tables(a, tmp: Path) -> dict:
         if not given:
             print(f"{PROG}: training the {label} robot's Q-table (5000 simulated iterations, seed 0, DoD {dod})",
                   file=sys.stderr)
-            given = str(train_q(tmp / f"q_{label}.json", dod))
+            given = str(train_q(Path(a.data_dir) / "field" / f"q_{label}.json", dod))  # kept: the node reads it there
         tables[label] = given
     return tables
 

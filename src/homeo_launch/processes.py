@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -18,6 +19,9 @@ import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+
+from homeo_msgs_py.auth import ENV as AUTH_ENV
+from homeo_msgs_py.auth import load_signer, make_secret
 
 STOP_GRACE_S = 3.0  # SIGINT, then SIGTERM, then SIGKILL: the whole stop stays under 5 s
 
@@ -49,11 +53,23 @@ def graph_env(domain_id: int | None = None) -> dict:
 
 
 class Graph:
-    def __init__(self, specs: list[NodeSpec], env: dict | None = None, log_dir: str | None = None):
+    """``auth``: the graph signs its messages with a secret made here (``homeo_msgs_py.auth``);
+    ``namespace``: every node (and so every topic and service) under ``/namespace``."""
+
+    def __init__(self, specs: list[NodeSpec], env: dict | None = None, log_dir: str | None = None,
+                 namespace: str = "", auth: bool = True):
         self.specs = specs
         self.env = dict(env or graph_env())
         self.env["HOMEO_PARENT_PID"] = str(os.getpid())
+        self.namespace = check_namespace(namespace)
         self._tmp = None
+        self._auth_dir = None
+        self.signer = None
+        self.env.pop(AUTH_ENV, None)
+        if auth:
+            key_file, self._auth_dir = make_secret()
+            self.env[AUTH_ENV] = str(key_file)
+            self.signer = load_signer(self.env)
         if log_dir is None:
             self._tmp = tempfile.TemporaryDirectory(prefix="homeo-graph-")
             log_dir = self._tmp.name
@@ -68,8 +84,10 @@ class Graph:
                 continue
             pfile = self.log_dir / f"{s.name}.params.json"
             # JSON is YAML: rcl reads it as a parameters file; strings stay strings
-            pfile.write_text(json.dumps({s.name: {"ros__parameters": s.params}}))
+            pfile.write_text(json.dumps({"/**": {"ros__parameters": s.params}}))  # this node's file alone
             cmd = [sys.executable, "-m", s.module, *s.args, "--ros-args", "--params-file", str(pfile)]
+            if self.namespace:
+                cmd += ["-r", f"__ns:={self.namespace}"]
             log = open(self.log_dir / f"{s.name}.log", "wb")
             self.procs[s.name] = subprocess.Popen(cmd, env=self.env, stdin=subprocess.DEVNULL, stdout=log,
                                                   stderr=subprocess.STDOUT, start_new_session=True)
@@ -128,6 +146,22 @@ class Graph:
         if self._tmp is not None:
             self._tmp.cleanup()
             self._tmp = None
+        if self._auth_dir is not None:
+            shutil.rmtree(self._auth_dir, ignore_errors=True)
+            self._auth_dir = None
+
+
+def check_namespace(ns: str) -> str:
+    """``r1`` or ``/r1/a`` -> ``/r1`` / ``/r1/a``; '' stays ''. ROS names: letters, digits and '_',
+    not starting with a digit (design.ros2.org/articles/topic_and_service_names.html)."""
+    if not ns:
+        return ""
+    parts = ns.strip("/").split("/")
+    for part in parts:
+        if not part or not (part[0].isalpha() or part[0] == "_") or not all(c.isalnum() or c == "_" for c in part) \
+                or not part.isascii():
+            raise ValueError(f"namespace {ns!r} is not a ROS name (letters, digits and _, separated by /)")
+    return "/" + "/".join(parts)
 
 
 def _signal(p: subprocess.Popen, sig: int) -> None:
@@ -135,3 +169,24 @@ def _signal(p: subprocess.Popen, sig: int) -> None:
         os.killpg(p.pid, sig)  # the node's whole session: nothing it started survives
     except (ProcessLookupError, PermissionError):
         pass
+
+
+def add_graph_options(p) -> None:
+    """``--namespace`` and ``--no-auth``, shared by ``sim`` and ``pepper``."""
+    p.add_argument("--namespace", type=_namespace_arg, default="", metavar="NS",
+                   help="put the whole graph (nodes, topics, services) under /NS, so several robots share a domain")
+    p.add_argument("--data-dir", metavar="DIR", default="out",
+                   help="files the nodes read or write by parameter (Q-tables, models, traces) live here; a "
+                        "file option naming a place outside it is refused (default out)")
+    p.add_argument("--no-auth", action="store_true",
+                   help="do not sign the graph's messages: for debugging with ros2 topic pub; anyone on the "
+                        "domain can then steer the robot (docs/SECURITY.md)")
+
+
+def _namespace_arg(text: str) -> str:
+    import argparse
+
+    try:
+        return check_namespace(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None

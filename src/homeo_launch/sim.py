@@ -24,6 +24,7 @@ import time
 from dataclasses import dataclass, replace
 
 from homeo_msgs_py.cli_args import UserError
+from homeo_msgs_py.data_dir import DEFAULT as DATA_DIR
 from homeo_msgs_py.graph import BAYES, GRAPHS, NODES, endpoints
 from homeo_sim.cli import format_table, run_output
 from homeo_sim.stats import json_safe
@@ -60,10 +61,16 @@ class SimOptions:
     resume: str | None = None  # a checkpoint folder to start the robot nodes from
     max_restarts: int = 3  # per robot node; 0 = a node that dies stops the graph
     session: str = ""  # this launch's id, in every checkpoint (a restarted node takes only its own)
+    data_dir: str = DATA_DIR  # files named by parameters live here (homeo_msgs_py.data_dir)
+    namespace: str = ""  # the whole graph under /namespace
+    auth: bool = True  # the graph signs its messages (docs/SECURITY.md); --no-auth for debugging
 
 
 def sim_specs(o: SimOptions) -> list[NodeSpec]:
-    common = {"scenario": o.scenario or "", "overrides": json.dumps(dict(o.overrides))}
+    from homeo_decision.node_runtime import overrides_param
+
+    common = {"scenario": o.scenario or "", "overrides": overrides_param(dict(o.overrides)),
+              "data_dir": os.path.abspath(o.data_dir)}
     decision = dict(common, seed=o.seed)
     for k, v in (("dod", o.dod), ("xi", o.xi)):
         if v is not None:
@@ -115,16 +122,16 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
         o = replace(o, extra_readers=1)
     if o.checkpoint_dir and not o.session:
         o = replace(o, session=new_session())
-    graph = Graph(sim_specs(o), env, log_dir)
+    graph = Graph(sim_specs(o), env, log_dir, namespace=o.namespace, auth=o.auth)
     mon = tap = sup = None
     try:
-        mon = Monitor()
+        mon = Monitor(graph.namespace, graph.signer)
         sup = Supervisor(graph, mon.node, o.max_restarts, os.path.abspath(o.checkpoint_dir) if o.checkpoint_dir else "",
                          log=(lambda text: None) if quiet else None)
         if sinks:
             from .tap import Tap
 
-            tap = Tap(mon.node, sinks)
+            tap = Tap(mon.node, sinks, signer=graph.signer)
             for s in sinks:
                 if hasattr(s, "attach"):
                     s.attach(mon.node)
@@ -232,9 +239,9 @@ def save_q(mon: Monitor, o) -> tuple[bool, str]:
     """Ask the decision node to save its table to ``--save-q`` (also on Ctrl-C)."""
     ok, msg = True, ""
     if o.load_q and o.save_q != o.load_q:
-        ok, msg = _set_param(mon, "/homeo_decision", "q_table_path", os.path.abspath(o.save_q))
+        ok, msg = _set_param(mon, "homeo_decision", "q_table_path", os.path.abspath(o.save_q))
     if ok:
-        ok, msg = mon.call_trigger("/homeo_decision/save_q", timeout=5.0)
+        ok, msg = mon.call_trigger("homeo_decision/save_q", timeout=5.0)
     return ok, msg
 
 
@@ -259,14 +266,38 @@ def _set_param(mon: Monitor, node: str, name: str, value) -> tuple[bool, str]:
         mon.node.destroy_client(cli)
 
 
+def check_files(a, read=(), write=()) -> None:
+    """The file options of a launch, before anything starts: each inside ``--data-dir`` (the nodes
+    refuse any other place), the ones read existing, the ones written not a directory and in a
+    place that exists or can be made; ``--log-dir`` writable. Raises UserError (one line)."""
+    from homeo_msgs_py.data_dir import OutsideDataDir, resolve
+
+    for opt, f in (*((o, f) for o, f in read), *((o, f) for o, f in write)):
+        if not f:
+            continue
+        try:
+            resolve(a.data_dir, os.path.abspath(f), opt)
+        except OutsideDataDir as exc:
+            raise UserError(f"{exc} (give --data-dir, or a path under it)") from None
+    for opt, f in read:
+        if f and not os.path.isfile(f):
+            raise UserError(f"{opt} {f}: file not found")
+    for opt, f in write:
+        if f and os.path.isdir(f):
+            raise UserError(f"{opt} {f} is a directory, not a file")
+    if getattr(a, "log_dir", None):
+        try:
+            os.makedirs(a.log_dir, exist_ok=True)
+        except OSError as exc:
+            raise UserError(f"--log-dir {a.log_dir}: {exc.strerror}") from None
+        if not os.access(a.log_dir, os.W_OK | os.X_OK):
+            raise UserError(f"--log-dir {a.log_dir} is not writable")
+
+
 def options_from_args(a) -> SimOptions:
     from homeo_decision.scenario import load_scenario
 
-    for f in (a.load_q,):
-        if f and not os.path.isfile(f):
-            raise UserError(f"Q-table file not found: {f}")
-    if a.trace and os.path.dirname(os.path.abspath(a.trace)) and not os.path.isdir(os.path.dirname(os.path.abspath(a.trace))):
-        raise UserError(f"--trace {a.trace}: the directory does not exist")
+    check_files(a, read=[("--load-q", a.load_q)], write=[("--save-q", a.save_q), ("--trace", a.trace)])
     if getattr(a, "record", None):
         from .record import check_new_bag
 
@@ -278,23 +309,26 @@ def options_from_args(a) -> SimOptions:
                       pseudo_update=False if a.no_pseudo else None, scenario=a.scenario, overrides=tuple(a.set),
                       load_q=a.load_q, save_q=a.save_q, trace=a.trace, action_timeout=a.action_timeout,
                       intention=a.intention, human=a.human, human_timeout=a.human_timeout,
+                      data_dir=a.data_dir, namespace=a.namespace, auth=not a.no_auth,
                       **durable_options(a, "sim", sc, a.intention == BAYES))
 
 
 def open_sinks(a, graph: str, iterations: int, seed: int, sc, overrides, **extra) -> list:
     """The tap's sinks the command line asks for: ``--record DIR`` (a bag), ``--foxglove`` (live)."""
+    from .tap import tapped_topics
+
+    topics = tapped_topics(namespace=getattr(a, "namespace", ""))
     sinks = []
     try:
         if getattr(a, "record", None):
             from .record import BagSink, check_new_bag, run_info
-            from .tap import tapped_topics
 
             sinks.append(BagSink(check_new_bag(a.record), run_info(graph, iterations, seed, sc, overrides, **extra),
-                                 tapped_topics()))
+                                 topics))
         if getattr(a, "foxglove", None):
             from .live import FoxgloveSink
 
-            sinks.append(FoxgloveSink(a.foxglove, sc, person=getattr(a, "human", "sim") == "person"))
+            sinks.append(FoxgloveSink(a.foxglove, sc, topics, person=getattr(a, "human", "sim") == "person"))
             if not getattr(a, "quiet", False):
                 print(f"{PROG}: Foxglove: open ws://{a.foxglove[0]}:{sinks[-1].port}", file=sys.stderr)
     except BaseException:

@@ -13,7 +13,8 @@ import json
 import time
 from dataclasses import dataclass
 
-from homeo_msgs_py.graph import DIAGNOSTICS, TOPICS
+from homeo_msgs_py.graph import DIAGNOSTICS, RECORDER, TOPICS
+from homeo_msgs_py.schemas import parse_json
 
 STRING = "std_msgs/msg/String"
 DIAGNOSTIC_ARRAY = "diagnostic_msgs/msg/DiagnosticArray"
@@ -28,10 +29,11 @@ class Tapped:
     kind: str  # "state", "event" (graph.TOPICS) or "diagnostics"
 
 
-def tapped_topics(extra: tuple = ()) -> list[Tapped]:
-    """Every topic of the graph (absolute names: the launcher has no namespace), then /diagnostics."""
-    out = [Tapped(k, "/" + t.name, STRING, t.kind) for k, t in TOPICS.items()]
-    out += [Tapped(k, "/" + TOPICS[k].name if k in TOPICS else "/" + k, STRING, "event") for k in extra]
+def tapped_topics(extra: tuple = (), namespace: str = "") -> list[Tapped]:
+    """Every topic of the graph (absolute names, in the graph's ``namespace``), then /diagnostics."""
+    ns = namespace.rstrip("/")
+    out = [Tapped(k, f"{ns}/{t.name}", STRING, t.kind) for k, t in TOPICS.items()]
+    out += [Tapped(k, f"{ns}/{TOPICS[k].name}" if k in TOPICS else f"{ns}/{k}", STRING, "event") for k in extra]
     return out + [Tapped(DIAG_KEY, DIAGNOSTICS, DIAGNOSTIC_ARRAY, "diagnostics")]
 
 
@@ -68,7 +70,7 @@ class Tap:
     WAKE_S = 0.1  # the loop looks at ``close`` at least this often
     GATHER_S = 0.005
 
-    def __init__(self, context_node, sinks, topics: list[Tapped] | None = None):
+    def __init__(self, context_node, sinks, topics: list[Tapped] | None = None, signer=None):
         import threading
 
         import rclpy
@@ -79,9 +81,11 @@ class Tap:
         from homeo_msgs_py.qos import quiet_sub_events, sub_qos
 
         self.context = context_node.context
-        node = self.node = rclpy.create_node("homeo_record", context=self.context,
+        ns = context_node.get_namespace()
+        node = self.node = rclpy.create_node(RECORDER, namespace=ns, context=self.context,
                                              start_parameter_services=False, enable_rosout=False)
-        self.topics = topics or tapped_topics()
+        self.topics = topics or tapped_topics(namespace="" if ns == "/" else ns)
+        self.signer = signer  # the run ends with the graph's own status, not a stranger's
         self.sinks = list(sinks)
         self.count = 0
         self.done = False
@@ -138,8 +142,10 @@ class Tap:
             s.write(t, now, raw)
         if t.key == "run_status" and not self.done:
             try:
-                self.done = json.loads(string_data(raw)).get("done") is True
-            except ValueError:
+                text = string_data(raw)
+                obj = parse_json(text if self.signer is None else self.signer.verify(text))
+                self.done = isinstance(obj, dict) and obj.get("done") is True
+            except ValueError:  # Rejected is one: not the graph's, or not JSON
                 pass
 
     def close(self) -> None:

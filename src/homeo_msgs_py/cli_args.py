@@ -16,14 +16,19 @@ class Parser(argparse.ArgumentParser):
         raise UserError(message)
 
 
-def int_at_least(lo: int):
+def int_at_least(lo: int, hi: int | None = None):
+    """An integer >= lo (and <= hi: a node's parameter range, checked before anything starts)."""
     def conv(s: str) -> int:
         try:
-            v = int(s)
+            v = int(s) if len(s) <= 30 else None
         except ValueError:
-            raise argparse.ArgumentTypeError(f"{s!r} is not an integer") from None
+            v = None
+        if v is None:
+            raise argparse.ArgumentTypeError(f"{s[:32]!r} is not an integer")
         if v < lo:
             raise argparse.ArgumentTypeError(f"{v} is below the minimum {lo}")
+        if hi is not None and v > hi:
+            raise argparse.ArgumentTypeError(f"{v} is above the maximum {hi}")
         return v
     return conv
 

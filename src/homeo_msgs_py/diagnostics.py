@@ -21,6 +21,9 @@ class RejectLog:
     changed: bool = False
 
     def reject(self, topic: str, reason: str) -> None:
+        from .schemas import short
+
+        reason = short(reason)  # a sender's text must not flood /diagnostics
         self.counts[topic] += 1
         self.last[topic] = reason
         r = self.recent.setdefault(topic, [])

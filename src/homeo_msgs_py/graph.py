@@ -14,6 +14,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+# parameter ranges the nodes declare and the launchers check before anything starts
+SEED_MAX = 2**31 - 1
+TICKS_MAX = 10**9
+
 STATE, EVENT = "state", "event"  # state topics are latched, events are not (qos.py)
 
 # intention recognition: observe the true intention (the thesis's simulation) or recognise it
@@ -64,6 +68,9 @@ TOPICS: dict[str, Topic] = {
     # a person playing the human (``--human person``): read by the simulation in that mode only
     "human_input": Topic("homeo/human_input", "homeo/human_input", EVENT),
 }
+# the graph's own topics, signed when the graph runs with authentication (auth.py); a person's
+# input is typed by hand and is not
+SIGNED = frozenset(k for k in TOPICS if k != "human_input")
 DIAGNOSTICS = "/diagnostics"  # absolute: every node reports to the one aggregator topic
 DEVICE = "homeo/device"  # std_msgs/String plain JSON from the Pepper bridge (Play/Stop/... commands)
 
@@ -81,6 +88,8 @@ NODES: dict[str, NodeDesc] = {
     "homeo_decision": NodeDesc("homeo_decision", "homeo_decision.node", "decision", ("action",),
                                (Input("drives"),), ("~/save_q", "~/load_q", "~/reset")),
 }
+LAUNCHER = "homeo_launch"  # the launcher's own node (its monitor)
+RECORDER = "homeo_record"  # the launcher's tap (a bag, a live view)
 ROBOT_NODES = ("homeo_intention", "homeo_drives", "homeo_decision")
 GRAPHS: dict[str, tuple] = {
     "sim": ("homeo_sim",) + ROBOT_NODES,
@@ -93,9 +102,10 @@ def topic_name(key: str) -> str:
 
 
 def key_of(name: str) -> str | None:
-    """The key of a topic given by its name, with or without the leading slash (None: not ours)."""
+    """The key of a topic given by its name, with or without the leading slash and a namespace
+    (``/r1/homeo/world``); None: not ours."""
     bare = name.lstrip("/")
-    return next((k for k, t in TOPICS.items() if t.name == bare), None)
+    return next((k for k, t in TOPICS.items() if bare == t.name or bare.endswith("/" + t.name)), None)
 
 
 def schema_of(key: str) -> str:
@@ -121,6 +131,13 @@ def endpoints(graph: str, learning: bool) -> dict[str, tuple[int, int]]:
 def readers(graph: str, topic: str, learning: bool) -> int:
     """How many nodes of ``graph`` read ``topic`` (a world node's start gate waits for them)."""
     return endpoints(graph, learning).get(topic, (0, 0))[1]
+
+
+def own_endpoints(infos, nodes, namespace: str) -> int:
+    """How many of the endpoints ``infos`` (rclpy ``TopicEndpointInfo``: node_name, node_namespace)
+    belong to ``nodes`` in ``namespace``: a start gate counts its own graph, not whoever else
+    listens on the domain."""
+    return sum(1 for i in infos if i.node_name in nodes and i.node_namespace == namespace)
 
 
 def describe() -> str:

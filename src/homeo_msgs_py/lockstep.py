@@ -19,44 +19,75 @@ from .schemas import Message, Rejected
 
 @dataclass
 class TickJoin:
+    """Joins a node's inputs into ticks. It cannot be wedged: a new run is taken only from the
+    run's first tick (``run + 1``, as the simulation's ~/reset makes it), or mid-run by a node that
+    has none yet (one restarted by the launcher); a tick whose missing input will never come
+    (every topic it lacks has moved on) is skipped once a later tick is complete."""
+
     offsets: dict  # input name -> tick offset (0 or negative)
     window: int = 2
     run: int = -1
     expected: int = 0
+    skipped: int = 0  # ticks given up because an input of theirs was lost
     _pending: dict = field(default_factory=dict)  # node tick -> {input: Message}
 
-    def restart(self, run: int) -> None:
-        self.run, self.expected = run, 0
+    def restart(self, run: int, at: int = 0) -> None:
+        self.run, self.expected = run, at
         self._pending.clear()
 
     def put(self, name: str, msg: Message) -> list[tuple[int, dict]]:
         """Store one input; returns the ticks it completed, in order, each with its inputs.
+        An exact repeat of a stored input (a resent tick) is taken as a no-op.
 
-        Raises :class:`Rejected` for a stale tick, a tick too far ahead, or an older run.
-        A newer run restarts the join at tick 0 (the simulation was reset).
+        Raises :class:`Rejected` for a stale tick (``.tick`` says which), a tick too far ahead,
+        an older run, or a newer run that does not start at its first tick.
         """
-        if msg.run < self.run:
-            raise Rejected(f"stale run {msg.run} (current run {self.run})")
-        if msg.run > self.run:
-            self.restart(msg.run)
         k = msg.tick - self.offsets[name]
+        if msg.run != self.run:
+            if msg.run < self.run:
+                raise Rejected(f"stale run {msg.run} (current run {self.run})")
+            if self.run >= 0 and not (msg.run == self.run + 1 and k == 0):
+                raise Rejected(f"run {msg.run} at tick {msg.tick} is not the start of the next run "
+                               f"(current run {self.run})")
+            self.restart(msg.run, at=0 if self.run >= 0 else max(k, 0))
         if k < self.expected:
-            raise Rejected(f"stale tick {msg.tick} on {name} (now at tick {self.expected})")
+            raise Stale(f"stale tick {msg.tick} on {name} (now at tick {self.expected})", k)
         if k > self.expected + self.window:
             raise Rejected(f"tick {msg.tick} on {name} is ahead of the run (now at tick {self.expected})")
         slot = self._pending.setdefault(k, {})
         if name in slot:
-            raise Rejected(f"duplicate {name} for tick {msg.tick}")
+            if slot[name].fields == msg.fields:
+                return []
+            raise Rejected(f"a different {name} for tick {msg.tick}")
         slot[name] = msg
         done = []
-        while self._complete(self.expected):
-            done.append((self.expected, self._pending.pop(self.expected, {})))
-            self.expected += 1
-        return done
+        while True:
+            if self._complete(self.expected):
+                done.append((self.expected, self._pending.pop(self.expected, {})))
+                self.expected += 1
+                continue
+            later = [t for t in self._pending if t > self.expected and self._complete(t)]
+            if not later:
+                return done
+            # a later tick is whole: DDS keeps each topic in order, so what the expected tick
+            # still lacks was lost on the way (crowded out of a queue) and will not come
+            nxt = min(later)
+            self.skipped += nxt - self.expected
+            for t in [t for t in self._pending if t < nxt]:
+                del self._pending[t]
+            self.expected = nxt
 
     def _complete(self, k: int) -> bool:
         slot = self._pending.get(k, {})
         return all(n in slot for n, off in self.offsets.items() if k + off >= 0)
+
+
+class Stale(Rejected):
+    """An input of a tick already handled; ``tick`` is the node's tick it belonged to."""
+
+    def __init__(self, reason: str, tick: int):
+        super().__init__(reason)
+        self.tick = tick
 
 
 # -- the world side of the lockstep ---------------------------------------------------------------
@@ -125,6 +156,9 @@ class LockstepDriver:
         self._retry_at = 0.0
         self._action: Message | None = None
         self._last_fields: dict | None = None  # the last action message's fields (drives for the metrics)
+        self._last_msg: Message | None = None  # the last action message taken (its repeats are no-ops)
+        self._sent: tuple = ()  # what this tick published: (outcome of k-1 or None, observation, world)
+        self._resent = False
         self._since = self.clock()
         self._due: float | None = None
         self._t_begin = self._t0 = self.clock()
@@ -170,6 +204,7 @@ class LockstepDriver:
                 return
             world, seen = res
             self.phase, self._since = "act", now
+            self._sent = (self._sent[0] if self._sent else None, seen, world)
             self.send("observation", self.tick, seen, self.run)  # first: the critical path starts here
             self.send("world", self.tick, world, self.run)
         elif kind == "step":
@@ -178,6 +213,7 @@ class LockstepDriver:
                 self.missed += 1
                 self.note("missed ticks")
             self.send("outcome", self.tick, fields, self.run)
+            self._sent = ((self.tick, fields),)
             self.tick += 1
             if self.iterations and self.tick >= self.iterations:
                 self.state = FINISHING  # the last drives come back with a final message
@@ -186,6 +222,7 @@ class LockstepDriver:
     def _observe(self) -> None:
         self.phase = "observe"
         self._action = None
+        self._resent = False
         self._submit("observe", self.side.observe, self.state == FINISHING)
 
     def poll(self) -> None:
@@ -202,6 +239,9 @@ class LockstepDriver:
             self._advance()
         if self.state in (RUNNING, FINISHING) and self.phase == "act" and self._action is None \
                 and now - self._since > self.timeout:
+            if not self._resent:
+                self._resend(now)
+                return
             if self.state == FINISHING:
                 self.note("missed drives")
                 self.log(f"no final message within {self.timeout:g} s: the run ends with the drives it has")
@@ -212,10 +252,27 @@ class LockstepDriver:
             self.log(f"no action for tick {self.tick} within {self.timeout:g} s: counted as no action")
             self._step(None)
 
+    def _resend(self, now: float) -> None:
+        """No action within the timeout: a message of the tick may have been lost on the way
+        (crowded out of a reader's queue). Send the tick again, once; the robot nodes answer a
+        repeat with the answer they gave (``JoinedStage``), so nothing is computed twice."""
+        self._resent, self._since = True, now
+        self.note("resent ticks")
+        self.log(f"no action for tick {self.tick} within {self.timeout:g} s: sending the tick again")
+        last, seen, world = self._sent if len(self._sent) == 3 else (None, None, None)
+        if last is not None:
+            self.send("outcome", last[0], last[1], self.run)
+        if seen is not None:
+            self.send("observation", self.tick, seen, self.run)
+            self.send("world", self.tick, world, self.run)
+
     # -- actions ---------------------------------------------------------------------------
     def on_action(self, msg: Message) -> None:
         if self.state not in (RUNNING, FINISHING):
             raise Rejected(f"no run in progress (state {self.state})")
+        last = self._last_msg
+        if last is not None and msg.run == self.run and msg.tick == last.tick and msg.fields == last.fields:
+            return  # a repeat of the action taken (answering a resent tick): nothing to do
         if msg.run != self.run:
             raise Rejected(f"run {msg.run} is not the current run {self.run}")
         k = self.tick
@@ -233,7 +290,7 @@ class LockstepDriver:
                            else f"an action after the run's end at tick {k}")
         self.side.check_action(f, k)  # raises Rejected when the world cannot use it
         self._last_fields = f
-        self._action = msg
+        self._action = self._last_msg = msg
         self._advance()
 
     def _advance(self) -> None:
@@ -283,11 +340,15 @@ class LockstepDriver:
 class JoinedStage:
     """A robot part as a node hosts it: its inputs join into ticks (``TickJoin``), a newer run
     restarts it, and each completed tick becomes the fields the node publishes. ROS-free, so the
-    nodes and the tests' in-memory bus run the very same code."""
+    nodes and the tests' in-memory bus run the very same code.
+
+    An input of the last tick it answered is the world re-sending a tick whose answer was lost
+    (``LockstepDriver``): the stage answers again with the same fields, computed once."""
 
     def __init__(self, offsets: dict, tick: Callable[[int, dict], dict], restart: Callable[[], None]):
         self.join = TickJoin(offsets)
         self._tick, self._restart = tick, restart
+        self._last: tuple[int, int, dict] | None = None  # (run, tick, fields) of the last answer
 
     @property
     def run(self) -> int:
@@ -296,7 +357,17 @@ class JoinedStage:
     def put(self, key: str, msg: Message) -> list[tuple[int, dict]]:
         """Take one input (raises Rejected); returns ``(tick, fields to publish)`` per completed tick."""
         run = self.join.run
-        done = self.join.put(key, msg)
+        try:
+            done = self.join.put(key, msg)
+        except Stale as exc:
+            last = self._last
+            if last is not None and last[0] == msg.run and last[1] == exc.tick:
+                return [(last[1], last[2])]
+            raise
         if self.join.run != run:
+            self._last = None
             self._restart()
-        return [(k, self._tick(k, {name: m.fields for name, m in inputs.items()})) for k, inputs in done]
+        out = [(k, self._tick(k, {name: m.fields for name, m in inputs.items()})) for k, inputs in done]
+        if out:
+            self._last = (self.join.run, *out[-1])
+        return out

@@ -16,10 +16,12 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from std_msgs.msg import String
 
+from . import data_dir
+from .auth import AuthError, load_signer
 from .diagnostics import RejectLog
-from .graph import DIAGNOSTICS, TOPICS
+from .graph import DIAGNOSTICS, LAUNCHER, NODES, RECORDER, SIGNED, TOPICS, own_endpoints
 from .qos import pub_qos, quiet_pub_events, quiet_sub_events, sub_qos
-from .schemas import Message, Rejected, Vocabulary, decode, encode
+from .schemas import Message, Rejected, Vocabulary, decode, encode, short
 
 DIAG_PERIOD_S = 1.0
 
@@ -88,10 +90,41 @@ class HomeoNode(Node):
         super().__init__(name, **kw)
         self.voc = Vocabulary()
         self.rejects = RejectLog(name)
+        try:
+            self.signer = load_signer()  # None: the graph runs without authentication (--no-auth)
+        except AuthError as exc:
+            raise NodeConfigError(str(exc)) from None
         from diagnostic_msgs.msg import DiagnosticArray
 
+        from rcl_interfaces.msg import ParameterDescriptor
+
+        self._fixed: dict = {}  # parameters set at start: a change is refused, the same value accepted
+        self._data_dir = self.declare_fixed("data_dir", data_dir.default_dir(), ParameterDescriptor(
+            description="files named by parameters (paths) live here; set at start"))
+        self.add_on_set_parameters_callback(self._guard_fixed)
         self._diag_pub = self.create_publisher(DiagnosticArray, DIAGNOSTICS, 10, event_callbacks=quiet_pub_events())
         self._diag_timer = self.create_timer(DIAG_PERIOD_S, self.publish_diagnostics)
+
+    # -- files named by parameters ---------------------------------------------------------
+    def data_path(self, path: str, what: str) -> str:
+        """``path`` (a parameter's value) inside the data directory, or ``OutsideDataDir``."""
+        return data_dir.resolve(self._data_dir, path, what)
+
+    def declare_fixed(self, name: str, default, descriptor):
+        """A parameter that takes effect at start only. Not ``read_only``: ``ros2 param load`` of a
+        ``ros2 param dump`` sets every parameter, and a read-only one fails even with its own value."""
+        value = self.declare_parameter(name, default, descriptor).value
+        self._fixed[name] = value
+        return value
+
+    def _guard_fixed(self, params):
+        from rcl_interfaces.msg import SetParametersResult
+
+        for prm in params:
+            if prm.name in self._fixed and prm.value != self._fixed[prm.name]:
+                return SetParametersResult(successful=False,
+                                           reason=f"{prm.name} is set when the node starts (restart it to change it)")
+        return SetParametersResult(successful=True)
 
     # -- topics ---------------------------------------------------------------------
     def publisher(self, key: str, min_subs: int = 0) -> GatedPublisher:
@@ -99,25 +132,55 @@ class HomeoNode(Node):
         return GatedPublisher(self, key, min_subs)
 
     def send(self, pub: GatedPublisher, tick: int, fields: dict, run: int = 0) -> None:
-        pub.publish(encode(pub.schema, tick, fields, run=run))
+        text = encode(pub.schema, tick, fields, run=run)
+        if self.signer is not None and pub.key in SIGNED:
+            text = self.signer.sign(text)
+        pub.publish(text)
 
     def subscribe(self, key: str, handler: Callable[[Message], None]):
         """``handler`` gets validated messages of topic ``key``; bad ones are dropped with a reason
         and counted. Handlers raise :class:`Rejected` for messages valid alone but not here (stale)."""
         schema = TOPICS[key].schema
         where = [TOPICS[key].name]
+        verify = self.signer.verify if self.signer is not None and key in SIGNED else None
 
         def cb(msg: String) -> None:
             try:
-                handler(decode(msg.data, self.voc, schema))
+                handler(decode(msg.data if verify is None else verify(msg.data), self.voc, schema))
             except Rejected as exc:
                 self.reject(where[0], str(exc))
+            except Exception as exc:  # noqa: BLE001 - a message must never take the node down
+                self.get_logger().error(f"handling a message on {where[0]} failed: {exc!r}",
+                                        throttle_duration_sec=5.0)
+                self.reject(where[0], f"internal error {type(exc).__name__} (see the node's log)")
 
         sub = self.create_subscription(String, TOPICS[key].name, cb, sub_qos(key), event_callbacks=quiet_sub_events())
         where[0] = sub.topic_name  # reported fully resolved, namespace included
         return sub
 
+    # -- the start gate -------------------------------------------------------------------
+    def gate_missing(self, pubs: dict, want: Callable[[str], int], inputs) -> list[str]:
+        """What a world node still waits for before tick 0: for each publisher (key -> GatedPublisher)
+        ``want(key)`` readers, matched and belonging to this graph (its nodes, or the launcher's tap,
+        in this namespace: another program listening on the domain does not count), and a writer of
+        this graph for each input topic key."""
+        ns = self.get_namespace()
+        mine = set(NODES) | {LAUNCHER, RECORDER}
+        out = []
+        for key, pub in pubs.items():
+            n = want(key)
+            own = own_endpoints(self.get_subscriptions_info_by_topic(pub.pub.topic_name), mine, ns)
+            got = min(own, pub.matched())
+            if got < n:
+                out.append(f"{pub.topic} has {got}/{n} readers")
+        for key in inputs:
+            topic = self.resolve_topic_name(TOPICS[key].name)
+            if own_endpoints(self.get_publishers_info_by_topic(topic), mine, ns) < 1:
+                out.append(f"{TOPICS[key].name} has no writer")
+        return out
+
     def reject(self, topic: str, reason: str) -> None:
+        reason = short(reason)
         self.rejects.reject(topic, reason)
         self.get_logger().warning(f"dropped a message on {topic}: {reason}", throttle_duration_sec=1.0)
         if self.rejects.counts[topic] == 1:

@@ -9,12 +9,17 @@ from .graph import STATE, TOPICS
 # State: the newest value is what matters, and a late joiner gets it (latched).
 STATE_PUB = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE,
                        durability=DurabilityPolicy.TRANSIENT_LOCAL)
-# Readers keep a few: a burst of garbage on the topic must not push out the real message
-# before the executor takes it. Depth does not affect QoS compatibility.
-STATE_SUB = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=ReliabilityPolicy.RELIABLE,
+# Readers keep many: a burst of garbage on the topic (a stranger's, thousands of messages) must
+# not push out the real message before the executor takes it; the memory is used only while a
+# burst lasts. Depth does not affect QoS compatibility. A message lost anyway costs one timeout:
+# the world sends the tick again (lockstep.py).
+SUB_DEPTH = 1000
+STATE_SUB = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=SUB_DEPTH, reliability=ReliabilityPolicy.RELIABLE,
                        durability=DurabilityPolicy.TRANSIENT_LOCAL)
 EVENT = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=50, reliability=ReliabilityPolicy.RELIABLE,
                    durability=DurabilityPolicy.VOLATILE)
+EVENT_SUB = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=SUB_DEPTH, reliability=ReliabilityPolicy.RELIABLE,
+                       durability=DurabilityPolicy.VOLATILE)
 
 
 def pub_qos(key: str) -> QoSProfile:
@@ -23,7 +28,7 @@ def pub_qos(key: str) -> QoSProfile:
 
 
 def sub_qos(key: str) -> QoSProfile:
-    return STATE_SUB if TOPICS[key].kind == STATE else EVENT
+    return STATE_SUB if TOPICS[key].kind == STATE else EVENT_SUB
 
 
 def quiet_pub_events():

@@ -1,19 +1,21 @@
-"""A tick join that a restarted node can rejoin mid-run, and that a missing input cannot wedge
-(no rclpy).
+"""A tick join that survives a long gap in one of its inputs (no rclpy).
 
-``TickJoin`` waits for every input of a tick and refuses a message more than ``window`` ticks
-ahead. A node that starts while the world is at tick 4,000 (a node the launcher restarted), or a
-node whose upstream died for a while, would then wait for ever. Two facts of the graph let it go
-on instead: every topic has one writer and is delivered in order (RELIABLE), so a tick that still
-lacks input X when X of a later tick arrives will never get it; and the world moves on only once
-a tick is answered or timed out, so a tick more than ``window`` behind the newest input is over.
-Such ticks are dropped (counted in ``skipped``) rather than waited for; the world counts them as
-missed on its side.
+``TickJoin`` starts mid-run when a node has no run yet (one the launcher restarted) and skips a
+tick whose lost input a later, complete tick proves will not come; but it refuses a message more
+than ``window`` ticks ahead. When an upstream node is down for longer than that (the launcher is
+restarting it), a node that joins several inputs keeps the oldest ticks, refuses every newer one,
+and waits for ever. Two facts of the graph let it go on: every topic has one writer and is
+delivered in order (RELIABLE), so a tick that still lacks input X when X of a later tick arrives
+will never get it; and the world moves on only once a tick is answered or timed out, so a tick
+more than ``window`` behind the newest input is over. Such ticks are dropped (counted in
+``skipped``) rather than waited for; the world counts them as missed on its side. Used by the
+robot nodes when the launcher supervises them (``homeo_decision.durable``); messages are
+authenticated before they reach a join, so a forged far-ahead tick cannot make it skip.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass  # noqa: F401 (the subclass stays a dataclass)
 
 from .lockstep import JoinedStage, TickJoin
 from .schemas import Message
@@ -21,14 +23,10 @@ from .schemas import Message
 
 @dataclass
 class RejoiningJoin(TickJoin):
-    skipped: int = 0
-
     def put(self, name: str, msg: Message) -> list[tuple[int, dict]]:
-        if msg.run > self.run:
-            self.restart(msg.run)
-        if msg.run == self.run:
+        if msg.run == self.run:  # runs are TickJoin's (a new one only at its start)
             k = msg.tick - self.offsets[name]
-            if k - self.window > self.expected:  # far behind (a fresh start mid-run): jump
+            if k - self.window > self.expected:  # far behind the newest input (an upstream gap): jump
                 self._drop_below(k - self.window)
             while self.expected < k:
                 slot = self._pending.get(self.expected, {})

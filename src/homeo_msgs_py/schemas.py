@@ -18,13 +18,26 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import time
 from dataclasses import dataclass
 from typing import Any, Callable
 
 VERSION = 1
 ENVELOPE = ("schema", "version", "run", "tick", "stamp")
-MAX_TEXT = 1 << 20  # a message longer than this is not ours
+AUTH_KEY = "auth"  # the graph's signature, appended last (``auth.py``); not part of the fields
+
+# Limits of the decode boundary: every payload within them is decoded, every other is refused
+# with a reason. The largest message of the graph (a run status with its metrics) is about 3 kB.
+MAX_TEXT = 64 * 1024  # characters of one message
+MAX_DEPTH = 8  # nesting of objects and arrays
+MAX_STR = 1024  # characters of one string or key
+MAX_ITEMS = 4096  # values in one message
+MAX_INT_DIGITS = 18  # |n| < 10**18: the ticks and runs of centuries of running
+MAX_REASON = 200  # characters of a reason kept for /diagnostics and the log
+
+
+_SURROGATE = re.compile(r"\\u[dD][89a-fA-F][0-9a-fA-F]{2}")
 
 
 class Rejected(ValueError):
@@ -305,19 +318,112 @@ def encode(schema: str, tick: int, fields: dict, run: int = 0, stamp: float | No
     env = {"schema": schema, "version": VERSION, "run": run, "tick": tick,
            "stamp": time.time() if stamp is None else stamp}
     env.update(fields)
-    return json.dumps(env, separators=(",", ":"))
+    try:
+        return json.dumps(env, separators=(",", ":"), allow_nan=False)
+    except ValueError:  # a NaN or an infinity in the fields (a metric of no samples): null
+        return json.dumps(finite(env), separators=(",", ":"), allow_nan=False)
+
+
+def finite(obj):
+    """``obj`` with every NaN and infinity replaced by None: what JSON can carry (RFC 8259)."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: finite(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [finite(v) for v in obj]
+    return obj
+
+
+def short(text: str, limit: int = MAX_REASON) -> str:
+    """A reason cut to ``limit`` characters, printable: what a sender put in it cannot flood
+    /diagnostics or the log, nor break their encoding (lone surrogates become escapes)."""
+    text = text.encode("utf-8", "backslashreplace").decode("utf-8")
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+def _parse_constant(name: str):
+    raise Rejected(f"{name} is not JSON (use null)")
+
+
+_INT_LIMIT = 10 ** MAX_INT_DIGITS
+
+
+def _check_tree(value: Any, text: str) -> None:
+    """Depth, number of values, string length, integer size and finite numbers of ``value``,
+    parsed from ``text``. The text's length says whether a string or the count can break a limit
+    (parse hooks per number would cost three times the parse)."""
+    strings = len(text) > MAX_STR
+    count = text.count(",") + text.count(":") + 1 >= MAX_ITEMS  # a bound on the number of values
+    n = 0
+    stack = [(value, 1)]
+    while stack:
+        v, depth = stack.pop()
+        t = type(v)
+        if t is dict or t is list:
+            if depth > MAX_DEPTH:
+                raise Rejected(f"nested deeper than {MAX_DEPTH}")
+            if t is dict:
+                if strings:
+                    for k in v:
+                        if len(k) > MAX_STR:
+                            raise Rejected(f"a key of {len(k)} characters (at most {MAX_STR})")
+                items = v.values()
+            else:
+                items = v
+            if count:
+                n += len(v)
+                if n > MAX_ITEMS:
+                    raise Rejected(f"more than {MAX_ITEMS} values")
+            for x in items:
+                tx = type(x)
+                if tx is dict or tx is list:
+                    stack.append((x, depth + 1))
+                elif tx is str:
+                    if strings and len(x) > MAX_STR:
+                        raise Rejected(f"a string of {len(x)} characters (at most {MAX_STR})")
+                elif tx is float:
+                    if x - x != 0.0:  # inf (1e999 parses to it) or nan
+                        raise Rejected("a number out of range")
+                elif tx is int and not -_INT_LIMIT < x < _INT_LIMIT:
+                    _check_number(x)
+        elif t is str:
+            if len(v) > MAX_STR:
+                raise Rejected(f"a string of {len(v)} characters (at most {MAX_STR})")
+        elif t is int or t is float:
+            _check_number(v)
+
+
+def _check_number(x) -> None:
+    if type(x) is float:
+        if x - x != 0.0:  # inf (1e999 parses to it) or nan
+            raise Rejected("a number out of range")
+    elif not -_INT_LIMIT < x < _INT_LIMIT:
+        raise Rejected(f"an integer of {len(str(abs(x)))} digits (at most {MAX_INT_DIGITS})")
 
 
 def parse_json(text, limit: int = MAX_TEXT, what: str = "") -> Any:
-    """The JSON value of a message's text, or :class:`Rejected` (not a string, too long, not JSON)."""
+    """The JSON value of a message's text, or :class:`Rejected` with the reason: not a string,
+    too long, not JSON, or beyond a limit (depth, string length, integer digits, non-finite
+    numbers, text that is not valid Unicode)."""
     if not isinstance(text, str):
         raise Rejected("not a string")
     if len(text) > limit:
         raise Rejected(f"message of {len(text)} characters is too long{what}")
+    if "\\u" in text and _SURROGATE.search(text):
+        raise Rejected("a \\u escape of a surrogate (send the character itself)")
     try:
-        return json.loads(text)
-    except (json.JSONDecodeError, RecursionError) as exc:
-        raise Rejected(f"not JSON ({exc.msg if hasattr(exc, 'msg') else exc})") from None
+        value = json.loads(text, parse_constant=_parse_constant)
+    except Rejected:
+        raise
+    except RecursionError:  # the parser's own limit (about 1000 levels)
+        raise Rejected(f"nested deeper than {MAX_DEPTH}") from None
+    except ValueError as exc:  # JSONDecodeError is one; so is an integer of more than 4300 digits
+        if "digits" in str(exc):
+            raise Rejected(f"an integer of more than 4300 digits (at most {MAX_INT_DIGITS})") from None
+        raise Rejected(short(f"not JSON ({exc.msg if hasattr(exc, 'msg') else exc})")) from None
+    _check_tree(value, text)
+    return value
 
 
 def decode(text: str, voc: Vocabulary, expect: str | None = None) -> Message:
@@ -329,15 +435,15 @@ def validate(obj: Any, voc: Vocabulary, expect: str | None = None) -> Message:
     if not isinstance(obj, dict):
         raise Rejected(f"not a JSON object but {type(obj).__name__}")
     schema = obj.get("schema")
-    if schema not in SCHEMAS:
-        raise Rejected(f"unknown schema {schema!r}")
+    if not isinstance(schema, str) or schema not in SCHEMAS:
+        raise Rejected(short(f"unknown schema {schema!r}"))
     if expect is not None and schema != expect:
         raise Rejected(f"schema {schema!r} on a topic that carries {expect!r}")
     if obj.get("version") != VERSION:
-        raise Rejected(f"{schema} version {obj.get('version')!r} is not {VERSION}")
+        raise Rejected(short(f"{schema} version {obj.get('version')!r} is not {VERSION}"))
     run = _int(0, 2**62)(obj.get("run"), voc, "run")
     tick = _int(0, 2**62)(obj.get("tick"), voc, "tick")
     stamp = _num(0.0, 1e12)(obj.get("stamp"), voc, "stamp")
-    body = {k: v for k, v in obj.items() if k not in ENVELOPE}
+    body = {k: v for k, v in obj.items() if k not in ENVELOPE and k != AUTH_KEY}
     fields = _fields(body, SCHEMAS[schema], voc, "")
     return Message(schema, run, tick, stamp, fields)

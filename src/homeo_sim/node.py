@@ -24,8 +24,9 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from std_srvs.srv import Trigger
 
 from homeo_decision.node_runtime import ScenarioNode, run_scenario_node
-from homeo_msgs_py.graph import NODES, TOPICS, readers
+from homeo_msgs_py.graph import NODES, SEED_MAX, TICKS_MAX, TOPICS, readers
 from homeo_msgs_py.lockstep import DONE, RUNNING, WAITING, LockstepDriver
+from homeo_msgs_py.data_dir import OutsideDataDir
 from homeo_msgs_py.node_base import NodeConfigError
 
 from .world_side import SimWorldSide
@@ -41,9 +42,9 @@ class SimNode(ScenarioNode):
         super().__init__(DESC.name)
         d = ParameterDescriptor
         self.declare_parameter("seed", 0, d(description="seed of the human's random stream",
-                                            integer_range=[IntegerRange(from_value=0, to_value=2**31 - 1, step=1)]))
+                                            integer_range=[IntegerRange(from_value=0, to_value=SEED_MAX, step=1)]))
         self.declare_parameter("iterations", 5000, d(description="ticks per run (0 = until stopped)",
-                                                     integer_range=[IntegerRange(from_value=0, to_value=10**9, step=1)]))
+                                                     integer_range=[IntegerRange(from_value=0, to_value=TICKS_MAX, step=1)]))
         self.declare_parameter("rate", 0.0, d(description="ticks per second (0 = as fast as lockstep allows)",
                                               floating_point_range=[FloatingPointRange(from_value=0.0, to_value=1000.0)]))
         self.declare_parameter("action_timeout", 5.0, d(description="seconds to wait for an action before the tick "
@@ -53,16 +54,15 @@ class SimNode(ScenarioNode):
         self.declare_parameter("trace_path", "", d(description="write one JSON line per tick here ('' = no trace)"))
         self.declare_parameter("wait_for_readers", True, d(description="start only when the graph's readers and "
                                                            "writers have matched"))
-        self.declare_parameter("extra_readers", 0, d(
+        self.declare_fixed("extra_readers", 0, d(
             description="readers beyond the graph's to wait for on every topic before tick 0 (a recorder, a live "
-                        "view): so that they miss nothing of the run", read_only=True,
+                        "view): so that they miss nothing of the run",
             integer_range=[IntegerRange(from_value=0, to_value=100, step=1)]))
-        self.declare_parameter("intention_accuracy", False, d(
+        self.declare_fixed("intention_accuracy", False, d(
             description="score the recognised intention of each action against the human's (bayes mode); the "
-                        "intention node then learns from the outcome, so the gate waits for its reader too",
-            read_only=True))
-        self.declare_parameter("human", SIM_HUMAN, d(description="who plays the human: the simulated one (sim) or a "
-                                                     "person on homeo/human_input (person)", read_only=True))
+                        "intention node then learns from the outcome, so the gate waits for its reader too"))
+        self.declare_fixed("human", SIM_HUMAN, d(description="who plays the human: the simulated one (sim) or a "
+                                                     "person on homeo/human_input (person)"))
         self.declare_parameter("human_timeout", 10.0, d(
             description="seconds a tick waits for the person before it counts as no intention (no answer)",
             floating_point_range=[FloatingPointRange(from_value=0.01, to_value=3600.0)]))
@@ -131,6 +131,11 @@ class SimNode(ScenarioNode):
                 drv.timeout = prm.value
             elif prm.name == "human_timeout" and hasattr(self.side.env.human, "timeout"):
                 self.side.env.human.timeout = prm.value
+            elif prm.name == "trace_path":
+                try:
+                    self.data_path(prm.value, "trace_path")  # opened at the next ~/reset
+                except OutsideDataDir as exc:
+                    return SetParametersResult(successful=False, reason=str(exc))
             elif prm.name == "iterations":
                 if prm.value and prm.value <= drv.tick and drv.state == RUNNING:
                     return SetParametersResult(successful=False, reason=f"the run is already at tick {drv.tick}")
@@ -138,6 +143,10 @@ class SimNode(ScenarioNode):
         return SetParametersResult(successful=True)  # seed and trace_path take effect at the next ~/reset
 
     def _open_trace(self, path: str):
+        try:
+            path = self.data_path(path, "trace_path")
+        except OutsideDataDir as exc:
+            raise NodeConfigError(str(exc)) from None
         if not path:
             return None
         try:
@@ -149,16 +158,9 @@ class SimNode(ScenarioNode):
     def _missing(self) -> list[str]:
         if not self.get_parameter("wait_for_readers").value:
             return []
-        out = []
         extra = self.get_parameter("extra_readers").value
-        for key, pub in self.pubs.items():
-            want = readers("sim", key, self.learning) + extra
-            if pub.matched() < want:
-                out.append(f"{pub.topic} has {pub.matched()}/{want} readers")
-        for i in DESC.inputs:
-            if self.count_publishers(TOPICS[i.topic].name) < 1:
-                out.append(f"{TOPICS[i.topic].name} has no writer")
-        return out
+        return self.gate_missing(self.pubs, lambda key: readers("sim", key, self.learning) + extra,
+                                 [i.topic for i in DESC.inputs])
 
     def _poll(self) -> None:
         drv = self.driver

@@ -72,15 +72,15 @@ class BridgeNode(ScenarioNode):
 
         qi.logging.setLevel(qi.logging.WARNING)
         D = ParameterDescriptor
-        self.declare_parameter("qi_url", DEFAULT_URL, D(description="NAOqi URL (tcp://host:9559, or tcps://host:9503 "
-                                                                    "with user/password)", read_only=True))
-        self.declare_parameter("user", "", D(description="NAOqi 2.9 user ('' = no authentication)", read_only=True))
-        self.declare_parameter("password", "", D(description="NAOqi 2.9 password", read_only=True))
-        self.declare_parameter("config", "", D(description="the robot's meaning of the scenario's names "
-                                                           "('' = scripts/pepper.json)", read_only=True))
-        self.declare_parameter("battery_source", "memory", D(
-            description="memory (ALMemory battery fraction) or albattery (ALBattery.getBatteryCharge)", read_only=True))
-        self.declare_parameter("interactions", 0, _int(0, 10**9, "interactions per run (0 = until stopped)"))
+        self.declare_fixed("qi_url", DEFAULT_URL, D(description="NAOqi URL (tcp://host:9559, or tcps://host:9503 "
+                                                                    "with user/password)"))
+        self.declare_fixed("user", "", D(description="NAOqi 2.9 user ('' = no authentication)"))
+        self.declare_fixed("password", "", D(description="NAOqi 2.9 password"))
+        self.declare_fixed("config", "", D(description="the robot's meaning of the scenario's names "
+                                                           "('' = scripts/pepper.json)"))
+        self.declare_fixed("battery_source", "memory", D(
+            description="memory (ALMemory battery fraction) or albattery (ALBattery.getBatteryCharge)"))
+        self.declare_parameter("interactions", 0, _int(0, G.TICKS_MAX, "interactions per run (0 = until stopped)"))
         self.declare_parameter("collect_window", 3.0, _float(0.0, 600.0, "longest wait for the user's reaction (s)"))
         self.declare_parameter("collect_quiet", 0.15, _float(0.0, 600.0, "a gap without robot events that ends the "
                                                                         "wait early (s; = collect_window: wait it out)"))
@@ -89,22 +89,20 @@ class BridgeNode(ScenarioNode):
         self.declare_parameter("anger_threshold", -1.0, _float(-1.0, 10.0, "voice anger level above this is a scolding, "
                                                                     "on the robot's 0..10 (NAOqi 2.5+) or 0..5 (2.1/2.4) "
                                                                     "scale (-1 = the config's)"))
-        self.declare_parameter("naoqi_version", "", D(description="the robot's NAOqi version, for its documented "
-                                                                  "formats ('' = the config's)", read_only=True))
+        self.declare_fixed("naoqi_version", "", D(description="the robot's NAOqi version, for its documented "
+                                                                  "formats ('' = the config's)"))
         self.declare_parameter("word_confidence", 0.4, _float(0.0, 1.0, "lowest confidence of a recognised word"))
         self.declare_parameter("intention_cues", True, D(
             description="put the intention recognised from the config's keyword/gesture cues in the observation "
                         "(the intention node's oracle mode needs it)"))
-        self.declare_parameter("end_with_script", False, D(
-            description="stand-in only: end the run when the stand-in's scripted user is done", read_only=True))
+        self.declare_fixed("end_with_script", False, D(
+            description="stand-in only: end the run when the stand-in's scripted user is done"))
         self.declare_parameter("wait_for_readers", True, D(description="start only when the graph's readers and "
                                                                       "writers have matched"))
         self.declare_parameter("outcome_readers", G.readers("pepper", "outcome", False),
                                _int(0, 100, "readers of homeo/outcome to wait for (2 when the intention node learns)"))
-        self.declare_parameter("connect_timeout", 5.0, _float(0.1, 600.0, "seconds per connection attempt",
-                                                              read_only=True))
-        self.declare_parameter("backoff_max", 10.0, _float(0.1, 600.0, "longest pause between reconnection attempts",
-                                                           read_only=True))
+        self.declare_fixed("connect_timeout", 5.0, _float(0.1, 600.0, "seconds per connection attempt"))
+        self.declare_fixed("backoff_max", 10.0, _float(0.1, 600.0, "longest pause between reconnection attempts"))
         p = lambda n: self.get_parameter(n).value  # noqa: E731
         if p("battery_source") not in ("memory", "albattery"):
             raise NodeConfigError(f"parameter battery_source: {p('battery_source')!r} is not memory or albattery")
@@ -248,17 +246,10 @@ class BridgeNode(ScenarioNode):
             out.append(f"the robot at {self.link['url']} is {self.link['state']} ({self.link['reason']})")
         if not self.get_parameter("wait_for_readers").value:
             return out
-        for key, pub in self.pubs.items():
-            if key == "run_status":
-                continue  # read by the launcher, not by a node
-            want = self.get_parameter("outcome_readers").value if key == "outcome" \
-                else G.readers("pepper", key, self.learning)
-            if pub.matched() < want:
-                out.append(f"{pub.topic} has {pub.matched()}/{want} readers")
-        for i in DESC.inputs:
-            if self.count_publishers(G.topic_name(i.topic)) < 1:
-                out.append(f"{G.topic_name(i.topic)} has no writer")
-        return out
+        pubs = {k: p for k, p in self.pubs.items() if k != "run_status"}  # read by the launcher, not a node
+        outcome = self.get_parameter("outcome_readers").value
+        return out + self.gate_missing(pubs, lambda key: outcome if key == "outcome"
+                                       else G.readers("pepper", key, self.learning), [i.topic for i in DESC.inputs])
 
     # -- status and diagnostics ----------------------------------------------------------------
     def _publish_status(self) -> None:
