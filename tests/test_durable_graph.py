@@ -210,3 +210,25 @@ def test_the_drives_node_killed_mid_run_is_restarted_and_the_run_completes(tmp_p
     assert p.returncode == 0, err[-3000:]
     res = json.loads(out)
     assert res["restarts"] == {"homeo_drives": 1} and res["iterations"] == n
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP])
+def test_sigterm_and_sighup_stop_save_print_and_leave_no_temporary_folder(tmp_path, sig):
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
+    env = dict(graph_env(fresh_domain()), TMPDIR=str(tmp))
+    p = subprocess.Popen([sys.executable, "-m", "homeo_launch.cli", "sim", "--quiet", "--iterations", "0", "--rate",
+                          "100", "--data-dir", str(tmp_path), "--checkpoint-dir", str(tmp_path / "ck")],
+                         env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        _wait_ticks(tmp_path / "ck" / "homeo_decision.json", 100, p)
+        assert any(tmp.iterdir())  # the launcher's log folder (and the graph's secret) live here meanwhile
+        p.send_signal(sig)
+        out, err = p.communicate(timeout=60)
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.communicate()
+    assert p.returncode == 0 and "HSR" in out, err[-2000:]  # an unbounded run: stopping it is its end
+    assert list(tmp.iterdir()) == []
+    assert _ticks(tmp_path / "ck" / "homeo_decision.json") > 100  # the final checkpoint
