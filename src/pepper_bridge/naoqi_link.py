@@ -29,7 +29,7 @@ import qi
 from .config import LinkSettings
 
 SERVICES = ("ALMemory", "ALBattery", "ALMotion", "ALNavigation", "ALTextToSpeech", "ALSpeechRecognition",
-            "ALVoiceEmotionAnalysis", "ALPeoplePerception", "ALEngagementZones")
+            "ALVoiceEmotionAnalysis", "ALPeoplePerception", "ALEngagementZones", "ALSystem")
 REQUIRED = ("ALMemory", "ALMotion", "ALTextToSpeech")
 CLIENT_NAME = "homeo_pepper_bridge"
 _MISSING = object()

@@ -62,7 +62,7 @@ class PepperWorldSide:
         link = self.env.bridge.status()
         return {"extra": {"log": list(self.log), "interactions_done": self.env.tick,
                           "robot": {k: link.get(k) for k in ("state", "connected", "reason", "url", "connects", "drops", "freezes")},
-                          "robot_missed": sum(1 for r in self.log if r.get("missed"))}}
+                          "robot_missed": sum(1 for r in self.log if r.get("missed")), "naoqi": self.env.bridge.naoqi()}}
 
     # -- helpers ---------------------------------------------------------------------------
     def _row(self, action_fields: dict | None) -> None:
