@@ -21,7 +21,8 @@ angry voice (``EmotionRecognized`` in the documented shape, anger level ``anger`
 scale: default 8 of 10, e.g. ``[[2, 8], [1, 8, 0, 0, 0], 7]``) otherwise when ``scold``
 (default true), with the proposal spoken (``WordRecognized``) when ``propose`` (default
 true). A missed intention is expressed again, up to ``patience`` attempts (default 1). An
-interaction with ``"intention": null`` expresses nothing and answers nothing. ``presence``
+interaction with ``"intention": null`` expresses nothing and answers nothing; ``calm`` (a level, e.g. 6)
+adds a calm voice to the answer (``[[1, 6], [6, 1, 0, 0, 0], 1]`` on 0..10: not a scolding). ``presence``
 ("present" / "absent") moves the user before expressing. ``helps`` (default true, per interaction or for the whole
 file): asked for help with the plug (an action of the config that sets the plug variable: the thesis's
 Attach / Detach), the user plugs / unplugs the robot when it stands where the plugged object is (the charger). ``start`` sets the stand-in body; ``robot`` holds the robot's initial internal
@@ -124,6 +125,8 @@ class ScriptedUser:
         emits: list = []
         row = {"interaction": len(self.log) + 1, "item": self.index, "intention": intention, "action": action, "satisfied": None,
                "feedback": 0, "proposal": None}
+        if it.get("calm") is not None:  # a calm answer (documented scale): no scolding
+            emits.append((EMOTION_EVENT, calm_voice(it["calm"], self.emotion_scale)))
         if intention is None:
             self._next()
         elif action in self.desired.get(intention, ()):
