@@ -179,6 +179,12 @@ def test_nan_never_leaves_a_node():
                                          "metrics": {"HSR": float("nan"), "x": [float("inf"), 1.0]}})
     assert "NaN" not in text and "Infinity" not in text
     assert json.loads(text)["metrics"] == {"HSR": None, "x": [None, 1.0]}
+    # the launcher reads null back as "no value" (a run interrupted before any sample)
+    import math
+
+    from homeo_sim.stats import describe
+
+    assert math.isnan(describe([None])["mean"]) and describe([None, 2.0])["per_seed"][1] == 2.0
 
 
 def test_signatures_hand_computed():

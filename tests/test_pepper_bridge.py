@@ -146,7 +146,8 @@ def test_head_touch_is_positive_feedback(pair, sensor):
 
 def test_anger_above_threshold_is_negative_feedback(pair):
     robot, bridge = pair()
-    assert (CFG.naoqi_version, CFG.emotion_scale, CFG.anger_threshold) == ("2.5", 10, 5)
+    # the shipped config asks the robot; the stand-in answers 2.5.5.5: levels 0..10, threshold 5
+    assert (CFG.naoqi_version, bridge.naoqi()["version"], CFG.emotion_scale, CFG.anger_level) == ("auto", "2.5.5.5", 10, 5)
     robot.raise_event(EMOTION_EVENT, emotion(3))  # below: nothing
     robot.raise_event(EMOTION_EVENT, emotion(5))  # at the threshold: not above
     robot.raise_event(EMOTION_EVENT, DOC_EXAMPLE)  # a sad voice: not a scolding

@@ -49,6 +49,78 @@ def test_launcher_runs_the_bridge_graph_on_the_standin_and_prints_the_interactio
     assert len(out["user_log"]) == 4  # the stand-in's user judged every action
 
 
+@pytest.mark.slow
+def test_a_scripted_session_with_every_input_a_drop_and_a_freeze_completes_through_the_graph(tmp_path):
+    """faults_user.json through ``homeo-launch pepper --standin``: battery falling, temperature status 1, 2, 3,
+    head touches, angry and calm voices on NAOqi 2.5's 0..10, spoken proposals, the user leaving and coming
+    back, a 10 s drop and a 20 s freeze. Every interaction's feedback is the user's, the drives are the body's."""
+    d = fresh_domain()
+    probe = Probe(d)
+    robot_st: list = []
+
+    def on_diag(arr):
+        robot_st.extend({"level": s.level[0] if isinstance(s.level, bytes) else s.level, "message": s.message,
+                         "values": {kv.key: kv.value for kv in s.values}} for s in arr.status if s.name == ROBOT)
+
+    from diagnostic_msgs.msg import DiagnosticArray
+
+    probe.node.create_subscription(DiagnosticArray, "/diagnostics", on_diag, 50)
+    out_f, err_f = open(tmp_path / "out.json", "w"), open(tmp_path / "err.txt", "w")
+    proc = subprocess.Popen([sys.executable, "-c", LAUNCH, "pepper", "--standin", "--script", "faults_user.json",
+                             "--json", "--log-dir", str(tmp_path / "logs")],
+                            env=graph_env(d), stdout=out_f, stderr=err_f, text=True)
+    try:
+        assert probe.spin_until(lambda: proc.poll() is not None, 240.0), "the session did not complete"
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        out_f.close()
+        err_f.close()
+        probe.spin_until(lambda: False, 0.3)
+        probe.close()
+    assert proc.returncode == 0, (tmp_path / "err.txt").read_text()[-2000:]
+    out = json.loads((tmp_path / "out.json").read_text())
+    log, user = out["log"], out["user_log"]
+
+    # the two faults: each costs the action it cut (MISSED, no effect), nothing else
+    missed = [r for r in log if r["missed"]]
+    assert len(missed) == 2 and out["missed"] == 2, [(r["interaction"], r["reason"]) for r in log if not r["ok"]]
+    assert "dropped" in missed[0]["reason"] and "unresponsive" in missed[1]["reason"]
+    assert all(r["feedback"] == 0 and r["proposal"] is None for r in missed)
+    # every performed action was judged by the user, and the bridge heard exactly that answer
+    done = [r for r in log if r["ok"] and r["action"] is not None]
+    assert [(r["action"], r["feedback"], r["proposal"]) for r in done] == \
+        [(u["action"], u["feedback"], u["proposal"]) for u in user]
+    fb = [r["feedback"] for r in done]
+    assert 1 in fb and -1 in fb and all(r["proposal"] for r in done if r["feedback"] == -1)  # touches; anger + words
+    calm = [r for r, u in zip(done, user) if u["item"] == 2]  # the calm voice (6 of 10) is no scolding
+    assert len(calm) == 1 and calm[0]["feedback"] == 0
+    # the body: the battery only falls (the user does not plug), the joints reach status 1, 2 and 3
+    battery = [r["battery_percent"] for r in log]
+    assert battery[0] == pytest.approx(40.0) and battery[-1] < 30.0 and battery == sorted(battery, reverse=True)
+    assert {1, 2, 3} <= {r["temperature_status"] for r in log}
+    # each interaction's drives (as the decision chose with them) are the body read that tick
+    for r in log:
+        assert r["drives"]["NEng"] == pytest.approx(100.0 - r["battery_percent"]), r
+        assert r["drives"]["NRes"] == NRES[r["temperature_status"]], r
+    praised = [k for k, r in enumerate(log[:-1]) if r["feedback"] == 1]
+    assert praised and all(log[k + 1]["drives"]["NAch"] < log[k]["drives"]["NAch"] for k in praised)
+    # the user left and came back: the world saw it
+    rel = [r["relation"] for r in log]
+    assert rel[0] != "absent" and "absent" in rel and rel[-1] != "absent"
+    # /diagnostics: the voices' scale is the robot's; the drop and the freeze were reported, and ended
+    assert robot_st[-1]["values"]["naoqi_version"] == "2.5.5.5 (robot)" and robot_st[-1]["values"]["emotion_scale"] == "0..10"
+    assert any(s["level"] == 2 and s["values"]["connected"] == "false" for s in robot_st)
+    frozen = [s for s in robot_st if s["values"]["state"] == "unresponsive"]
+    assert frozen and frozen[0]["level"] == 2
+    back = [s for s in robot_st if "answers again after" in s["values"]["reason"]]
+    assert back, "the end of the freeze was not reported"
+    held = float(back[0]["values"]["reason"].rsplit("after ", 1)[1].split(" s")[0])
+    assert 15.0 <= held <= 21.0  # found within ~5 s of the 20 s freeze (heartbeat 1 s, timeout 2 s)
+    assert int(robot_st[-1]["values"]["drops"]) >= 1 and int(robot_st[-1]["values"]["freezes"]) == 1
+    assert int(robot_st[-1]["values"]["rejected_total"]) == 0  # every voice was on the documented scale
+
+
 @pytest.fixture(scope="module")
 def live():
     """An unbounded bridge graph on a stand-in without a scripted user; the test drives the user."""

@@ -17,6 +17,7 @@ qi = pytest.importorskip("qi")
 from pepper_bridge.bridge import PepperBridge  # noqa: E402
 from pepper_bridge.config import LinkSettings, load_config  # noqa: E402
 from pepper_bridge.environment import PepperEnvironment  # noqa: E402
+from pepper_bridge.mapping import emotion_scale  # noqa: E402
 from pepper_bridge.naoqi_link import RobotUnavailable  # noqa: E402
 from pepper_bridge.standin import NotNaoqiPort, StandinRobot  # noqa: E402
 
@@ -227,3 +228,68 @@ def test_a_spoken_phrase_is_a_proposal(pair):
     robot.raise_event(WORD_EVENT, ["play music", 0.8, "stop the music", 0.3])
     got = bridge.collect(0.3, 2.0)
     assert [(e.kind, e.value) for e in got if e.kind == ev.PROPOSAL] == [(ev.PROPOSAL, "Play")]
+
+
+# -- the NAOqi version: asked of the robot, the config overrides -------------------------------
+# EmotionRecognized levels are 0..10 on NAOqi 2.5/2.8 and 0..5 on 2.1/2.4
+# (http://doc.aldebaran.com/2-5/naoqi/audio/alvoiceemotionanalysis.html, .../2-4/...)
+ANGRY_24 = [[2, 4], [1, 4, 0, 0, 0], 5]  # anger 4 of 5: above the threshold 5 of 10 = 2.5 of 5
+ANGRY_25 = [[2, 8], [1, 8, 0, 0, 0], 7]  # the documented scale of 2.5: 8 of 10, impossible on 0..5
+
+
+def feedback_of(robot, bridge, value) -> tuple[list, int]:
+    from pepper_bridge import events as ev
+    from pepper_bridge.mapping import EMOTION_EVENT
+
+    robot.raise_event(EMOTION_EVENT, value)
+    got = bridge.collect(0.3, 2.0)
+    return [e.value for e in got if e.kind == ev.FEEDBACK], sum(1 for e in got if e.kind == ev.REJECTED)
+
+
+@pytest.mark.parametrize("robot_version, configured, scale, scolded_by, rejects", [
+    ("2.4.3.28", "auto", 5, ANGRY_24, ANGRY_25),  # asked: a 2.4 robot's 4 of 5 scolds, an 8 is off its scale
+    ("2.5.5.5", "auto", 10, ANGRY_25, None),  # asked: 2.5's 0..10; 4 of 10 is not a scolding
+    ("2.4.3.28", "2.5", 10, ANGRY_25, None),  # the config overrides what the robot says
+])
+def test_the_emotion_scale_follows_the_version_the_robot_reports(thesis, robot_version, configured, scale,
+                                                                  scolded_by, rejects):
+    import dataclasses
+
+    cfg = dataclasses.replace(CFG, naoqi_version=configured, robot_version=None)
+    robot = StandinRobot(cfg, None, battery=50.0, time_scale=0.0, naoqi_version=robot_version)
+    bridge = PepperBridge(cfg, LinkSettings(url=robot.start(), **FAST), thesis)
+    try:
+        assert bridge.start(10.0)
+        settle(robot)
+        asked = [c for c in robot.calls("ALSystem") if c[1] == "systemVersion"]
+        assert len(asked) == (1 if configured == "auto" else 0)
+        n = bridge.naoqi()
+        assert (n["emotion_scale"], n["source"]) == (scale, "robot" if configured == "auto" else "config")
+        assert robot.emotion_scale == emotion_scale(robot_version)  # the stand-in speaks its own version
+        assert feedback_of(robot, bridge, scolded_by) == ([-1], 0)
+        if scale == 10:
+            assert feedback_of(robot, bridge, ANGRY_24) == ([], 0)  # 4 of 10: not above 5
+        if rejects is not None:
+            assert feedback_of(robot, bridge, rejects) == ([], 1)
+    finally:
+        bridge.stop()
+        robot.close()
+
+
+def test_a_version_without_a_known_scale_keeps_the_default_and_says_so(thesis):
+    import dataclasses
+
+    cfg = dataclasses.replace(CFG, naoqi_version="auto", robot_version=None)
+    robot = StandinRobot(cfg, None, battery=50.0, time_scale=0.0)
+    robot.naoqi_version = "9.1.0"  # a version no page documents
+    bridge = PepperBridge(cfg, LinkSettings(url=robot.start(), **FAST), thesis)
+    try:
+        assert bridge.start(10.0)
+        settle(robot)
+        assert bridge.naoqi()["source"] == "default" and bridge.naoqi()["emotion_scale"] == 10
+        snap = bridge.diagnostics.snapshot()
+        assert snap["incidents"].get("naoqi_version unknown") == 1
+        assert any("9.1.0" in r["reason"] for r in snap["recent"])
+    finally:
+        bridge.stop()
+        robot.close()

@@ -7,6 +7,8 @@ reading or a counted rejection, never an exception.
 
 from __future__ import annotations
 
+import dataclasses
+
 import queue
 
 import pytest
@@ -90,7 +92,14 @@ def test_the_standin_speaks_the_documented_shape():
 
 def test_config_threshold_is_on_the_version_scale(thesis):
     cfg = load_config(scenario=thesis)
-    assert (cfg.naoqi_version, cfg.emotion_scale, cfg.anger_threshold) == ("2.5", 10, 5.0)
+    # shipped: ask the robot; until it answers, and for the threshold, NAOqi 2.5's 0..10
+    assert (cfg.naoqi_version, cfg.version, cfg.emotion_scale, cfg.anger_threshold) == ("auto", "2.5", 10, 5.0)
+    cfg.robot_version = "2.4.3.28"  # a NAOqi 2.4 robot (0..5): the threshold keeps its place on the scale
+    assert (cfg.version, cfg.emotion_scale, cfg.anger_level) == ("2.4.3.28", 5, 2.5)
+    cfg.robot_version = "2.5.5.5"
+    assert (cfg.emotion_scale, cfg.anger_level) == (10, 5.0)
+    fixed = dataclasses.replace(cfg, naoqi_version="2.4", anger_threshold=2.0)  # the config overrides the robot
+    assert (fixed.version, fixed.emotion_scale, fixed.anger_level) == ("2.4", 5, 2.0)
     import json
 
     raw = json.loads(open(cfg.source).read())
@@ -101,6 +110,8 @@ def test_config_threshold_is_on_the_version_scale(thesis):
             config_from_dict(dict(raw, **bad), "pepper.json")
     ok = config_from_dict(dict(raw, naoqi_version="2.4", anger_threshold=2), "pepper.json")
     assert ok.emotion_scale == 5
+    with pytest.raises(ConfigError, match="auto"):
+        config_from_dict(dict(raw, naoqi_version="two"), "pepper.json")
 
 
 # -- any value: a reading or a counted rejection, never an exception ------------------------

@@ -13,9 +13,8 @@ With ``--human person`` the app's Publish panel can play the human: a client cha
 
 from __future__ import annotations
 
-import time
-
 import json
+import time
 
 from homeo_msgs_py.graph import TOPICS, key_of
 
@@ -35,8 +34,9 @@ class _Listener:
         self.channels: dict = {}  # (client id, client channel id) -> topic
 
     def on_client_advertise(self, client, channel) -> None:
-        if channel.topic in self.accept:
-            self.channels[(client.id, channel.id)] = channel.topic
+        # every channel, accepted or not yet: a client may advertise as soon as the server is up, before
+        # ``attach`` names the topics (that race lost a client's channel for its whole session)
+        self.channels[(client.id, channel.id)] = channel.topic
 
     def on_client_unadvertise(self, client, client_channel_id: int) -> None:
         self.channels.pop((client.id, client_channel_id), None)
@@ -48,10 +48,10 @@ class _Listener:
         pass
 
     def on_message_data(self, client, client_channel_id: int, data: bytes) -> None:
-        topic = self.channels.get((client.id, client_channel_id))
-        if topic is not None:
+        forward = self.accept.get(self.channels.get((client.id, client_channel_id)))
+        if forward is not None:  # a topic not accepted (or not yet: before attach) is dropped
             try:
-                self.accept[topic](bytes(data).decode("utf-8"))
+                forward(bytes(data).decode("utf-8"))
             except UnicodeDecodeError:
                 pass  # not text: the topic's own decoder would refuse it anyway
 

@@ -230,8 +230,8 @@ def scenario_file(path: str | None, out_dir: Path, continue_schedule: bool) -> s
 def pepper_specs(*, url: str, scenario: str, overrides: dict, seed: int, dod: float | None, q_table: str | None,
                  interactions: int, collect_window: float, collect_quiet: float, action_timeout: float,
                  end_with_script: bool, user: str = "", password: str = "", config: str = "",
-                 intention: str = "cues", extra_readers: int = 0, data_dir: str = "out",
-                 durable: dict | None = None) -> list[NodeSpec]:
+                 intention: str = "cues", extra_readers: int = 0, naoqi_version: str = "",
+                 data_dir: str = "out", durable: dict | None = None) -> list[NodeSpec]:
     from homeo_decision.node_runtime import overrides_param
 
     common = {"scenario": scenario, "overrides": overrides_param(overrides), "data_dir": os.path.abspath(data_dir)}
@@ -244,7 +244,8 @@ def pepper_specs(*, url: str, scenario: str, overrides: dict, seed: int, dod: fl
     bridge = dict(common, qi_url=url, user=user, password=password, config=os.path.abspath(config) if config else "",
                   interactions=interactions, collect_window=float(collect_window), collect_quiet=float(collect_quiet),
                   action_timeout=float(action_timeout), end_with_script=end_with_script,
-                  intention_cues=intention == "cues", outcome_readers=endpoints(intention)["outcome"][1] + extra_readers)
+                  intention_cues=intention == "cues", outcome_readers=endpoints(intention)["outcome"][1] + extra_readers,
+                  naoqi_version=naoqi_version)
     params = {"pepper_bridge": bridge, "homeo_intention": dict(common, mode=INTENTION_MODES[intention]),
               "homeo_drives": dict(common), "homeo_decision": decision}
     if durable:
@@ -369,7 +370,8 @@ def run_robot(a, label: str, dod: float | None, q_table: str | None, log_dir: Pa
                              collect_quiet=a.collect_quiet, action_timeout=a.action_timeout,
                              end_with_script=bool(a.standin and script), user=a.user or "",
                              password=a.password or "", config=a.config or "", intention=a.intention,
-                             extra_readers=1 if sinks else 0, data_dir=a.data_dir, durable=durable)
+                             extra_readers=1 if sinks else 0, naoqi_version=a.naoqi_version or "",
+                             data_dir=a.data_dir, durable=durable)
         status = run_pepper_graph(specs, log_dir, standin, on_row=on_row, last=last, intention=a.intention,
                                   sinks=sinks, namespace=a.namespace, auth=not a.no_auth,
                                   max_restarts=durable["max_restarts"], checkpoint_dir=durable["checkpoint_dir"],
@@ -421,6 +423,8 @@ def add_parser(subparsers) -> None:
     src.add_argument("--standin", action="store_true", help="start a stand-in Pepper on loopback (its own process)")
     p.add_argument("--connect-bound", type=float_in(0.5, 600.0), default=15.0,
                    help="seconds to wait for the robot at --qi-url before giving up with exit code 2 (default 15)")
+    p.add_argument("--naoqi-version", metavar="V", help="read the robot's values in NAOqi V's documented formats "
+                   "(e.g. 2.4: voice emotion levels 0..5) instead of asking it (ALSystem.systemVersion); auto = ask")
     p.add_argument("--user", help="NAOqi 2.9 user (tcps)")
     p.add_argument("--password", help="NAOqi 2.9 password (tcps)")
     p.add_argument("--script", metavar="FILE", help="the stand-in's scripted user (a path or a file of "
@@ -486,6 +490,13 @@ def _check_args(a) -> None:
         _script_path(a.script)
     if a.config and not os.path.isfile(a.config):
         raise UserError(f"config file not found: {a.config}")
+    if a.naoqi_version and a.naoqi_version != "auto":
+        from pepper_bridge.mapping import emotion_scale
+
+        try:
+            emotion_scale(a.naoqi_version)
+        except ValueError as exc:
+            raise UserError(f"--naoqi-version: {exc} or 'auto'") from None
     if a.collect_window is None:
         a.collect_window = 3.0 if a.standin else 8.0
     if a.collect_quiet is None:

@@ -20,7 +20,7 @@ def t975(df: int) -> float:
 
 def describe(values: Sequence[float]) -> dict:
     """``{"mean", "ci95": [lo, hi], "per_seed"}``; one value gives a zero-width interval."""
-    xs = [float(v) for v in values]
+    xs = [math.nan if v is None else float(v) for v in values]  # null: a metric of no samples (JSON has no NaN)
     n = len(xs)
     if n == 0:
         raise ValueError("no values to describe")

@@ -26,10 +26,10 @@ from homeo_decision.scenario import Scenario, load_scenario
 
 from . import events as ev
 from .config import LinkSettings, PepperConfig, check_scenario, load_config
-from .mapping import (BATTERY_KEY, PEOPLE_KEY, PEPPER_JOINTS, PLUGGED_KEY, ZONE_KEYS, Rejected, WordMap,
-                      max_temperature_status, need_from_percent, need_from_status, percent_from_albattery,
-                      percent_from_fraction, plugged, presence_of, relation_from_zones, relative_move,
-                      temperature_key)
+from .mapping import (AUTO_NAOQI, BATTERY_KEY, DEFAULT_NAOQI, PEOPLE_KEY, PEPPER_JOINTS, PLUGGED_KEY, ZONE_KEYS,
+                      Rejected, WordMap, emotion_scale, max_temperature_status, need_from_percent, need_from_status,
+                      percent_from_albattery, percent_from_fraction, plugged, presence_of, relation_from_zones,
+                      relative_move, short, temperature_key)
 from .naoqi_link import CLIENT_NAME, NaoqiLink, RobotUnavailable
 
 # Extractors the bridge reads, subscribed on every connection and unsubscribed at the end: the
@@ -114,6 +114,8 @@ class PepperBridge:
                       | set(self.cfg.intention_cues.get("keywords", {})))
 
     def _on_connect(self, link: NaoqiLink) -> None:  # supervisor thread, after (re)connection
+        if self.cfg.naoqi_version == AUTO_NAOQI:
+            self._ask_version(link)  # before speech starts: the voices' scale follows it
         # a fresh subscriber name per connection: the robot may still hold the old one after a drop
         self.subscriber = f"{CLIENT_NAME}_{link.connects}"
         speech = [("pause", True)]
@@ -132,6 +134,32 @@ class PepperBridge:
                     link.call(svc, method, *args)
                 except RuntimeError as exc:  # e.g. vocabulary refused while another app listens
                     self.diagnostics.incident(f"{svc}.{method}", str(exc).splitlines()[0] if str(exc) else "")
+
+    def _ask_version(self, link: NaoqiLink) -> None:
+        """ALSystem.systemVersion() (a string, e.g. "2.5.5.5"; NAOqi SDK ALSystemProxy: "running system
+        version"): a version without a known emotion scale keeps the default, and says so."""
+        try:
+            v = link.call("ALSystem", "systemVersion") if link.has("ALSystem") else None
+        except RuntimeError as exc:
+            self.diagnostics.incident("naoqi_version unknown", f"ALSystem.systemVersion: {str(exc).splitlines()[0]}")
+            return
+        if v is None:
+            self.diagnostics.incident("naoqi_version unknown", "the robot offers no ALSystem")
+            return
+        try:
+            emotion_scale(v)
+        except (ValueError, TypeError):
+            self.diagnostics.incident("naoqi_version unknown", f"ALSystem.systemVersion answered {short(v)}; "
+                                                               f"reading NAOqi {DEFAULT_NAOQI}'s formats")
+            return
+        self.cfg.robot_version = str(v)
+
+    def naoqi(self) -> dict:
+        """The version whose formats are read, where it came from, and the emotion scale."""
+        cfg = self.cfg
+        source = "config" if cfg.naoqi_version != AUTO_NAOQI else ("robot" if cfg.robot_version else "default")
+        return {"version": cfg.version, "source": source, "emotion_scale": cfg.emotion_scale,
+                "anger_level": cfg.anger_level}
 
     # -- events -----------------------------------------------------------------------
     def poll_events(self, timeout: float = 0.0) -> list:

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .mapping import DEFAULT_NAOQI, emotion_scale
+from .mapping import AUTO_NAOQI, DEFAULT_NAOQI, emotion_scale
 
 SCHEMA = "homeo-pepper-config"
 VERSION = 3  # 3: anger_threshold on the robot's emotion scale (naoqi_version), speech language and words
@@ -63,9 +63,9 @@ class PepperConfig:
     battery_drive: str  # the drive read from the battery (100 - percent)
     temperature_drive: str  # the drive read from the joints' temperature status (Table 4.6)
     plug: dict | None = None  # {"variable": "object.variable", "plugged": value, "unplugged": value}
-    anger_threshold: float = 5.0  # anger level above this is a scolding, on the 0..emotion_scale of naoqi_version
+    anger_threshold: float = 5.0  # anger level above this is a scolding, on the scale of naoqi_version (auto: 2.5's)
     word_confidence: float = 0.4
-    naoqi_version: str = DEFAULT_NAOQI  # which documented formats the robot speaks (e.g. the emotion scale)
+    naoqi_version: str = AUTO_NAOQI  # "auto": ask the robot (ALSystem.systemVersion); a version overrides it
     speech_language: str = "English"  # ALSpeechRecognition.setLanguage ('' = leave the robot's)
     proposals: dict = field(default_factory=dict)
     keywords: dict = field(default_factory=dict)
@@ -73,10 +73,29 @@ class PepperConfig:
     movement_event: str = "PepperBridge/Movement"
     intention_cues: dict = field(default_factory=dict)
     source: str = "<memory>"
+    robot_version: str | None = None  # what the robot reported (ALSystem.systemVersion), when naoqi_version is auto
+
+    @property
+    def version(self) -> str:
+        """The NAOqi version whose documented formats are read: the configured one, else the robot's,
+        else (auto, not asked yet or not understood) the default."""
+        if self.naoqi_version != AUTO_NAOQI:
+            return self.naoqi_version
+        return self.robot_version or DEFAULT_NAOQI
 
     @property
     def emotion_scale(self) -> int:
-        return emotion_scale(self.naoqi_version)
+        return emotion_scale(self.version)
+
+    @property
+    def threshold_scale(self) -> int:
+        """The scale ``anger_threshold`` is written on: the configured version's (auto: the default's)."""
+        return emotion_scale(DEFAULT_NAOQI if self.naoqi_version == AUTO_NAOQI else self.naoqi_version)
+
+    @property
+    def anger_level(self) -> float:
+        """The threshold on the robot's own scale (a 5 of 10 is a 2.5 of 5 on a NAOqi 2.4 robot)."""
+        return self.anger_threshold * self.emotion_scale / self.threshold_scale
 
     def phrase_actions(self) -> dict[str, str]:
         """Every phrase the robot may say -> the action it belongs to (how a user recognises it)."""
@@ -171,14 +190,16 @@ def config_from_dict(raw: Any, source: str = "<memory>", scenario=None) -> Peppe
         for phrase in a.say:
             if owner.setdefault(phrase, a.name) != a.name:
                 fail(f"actions.{a.name}.say", f"phrase {phrase!r} belongs to two actions ({owner[phrase]}, {a.name})")
-    version = raw.get("naoqi_version", DEFAULT_NAOQI)
+    version = raw.get("naoqi_version", AUTO_NAOQI)
     try:
-        scale = emotion_scale(version)
+        scale = emotion_scale(DEFAULT_NAOQI if version == AUTO_NAOQI else version)
     except ValueError as exc:
-        fail("naoqi_version", str(exc))
+        fail("naoqi_version", f"{exc} or {AUTO_NAOQI!r} (ask the robot)")
     v = raw.get("anger_threshold", 5.0)
     if not _is_number(v) or not 0.0 <= v < scale:
-        fail("anger_threshold", f"must be a number in [0, {scale}) (NAOqi {version} reports anger 0..{scale})")
+        on = f"NAOqi {version} reports anger 0..{scale}" if version != AUTO_NAOQI else \
+            f"with naoqi_version {AUTO_NAOQI!r} it is on NAOqi {DEFAULT_NAOQI}'s 0..{scale}, rescaled to the robot's"
+        fail("anger_threshold", f"must be a number in [0, {scale}) ({on})")
     if not isinstance(raw.get("speech_language", "English"), str):
         fail("speech_language", "must be a language name as ALSpeechRecognition.setLanguage takes it (e.g. English)")
     v = raw.get("word_confidence", 0.4)

@@ -167,6 +167,7 @@ class PepperEnvironment:
                          "ok": res["ok"], "reason": res["reason"], "missed": bool(res.get("unavailable")),
                          "feedback": out["feedback"],
                          "proposal": out["proposal"], "location": seen["world"]["robot"]["location"],
+                         "relation": seen["world"]["human"]["relation"],
                          "battery_percent": wb.get("battery_percent"),
                          "temperature_status": wb.get("temperature_status"), "observation": seen["observation"]}
         self.log.append(self.last_row)
@@ -182,6 +183,7 @@ class PepperEnvironment:
         self.last_row = {"interaction": self.tick + 1, "cue_intention": seen["cue_intention"], "action": name,
                          "ok": False, "reason": reason, "missed": True, "feedback": 0, "proposal": None,
                          "location": seen["world"]["robot"].get("location"),
+                         "relation": (seen["world"].get("human") or {}).get("relation"),
                          "battery_percent": seen["world"]["body"].get("battery_percent"),
                          "temperature_status": seen["world"]["body"].get("temperature_status"),
                          "observation": seen["observation"]}

@@ -94,7 +94,7 @@ class EventParser:
         if key in TOUCH_EVENTS:
             return [BridgeEvent(FEEDBACK, 1, key)] if touch_feedback(value, key) == 1 else []
         if key == EMOTION_EVENT:
-            fb = emotion_feedback(value, self.cfg.anger_threshold, self.cfg.emotion_scale, key)
+            fb = emotion_feedback(value, self.cfg.anger_level, self.cfg.emotion_scale, key)  # the robot's scale
             return [BridgeEvent(FEEDBACK, -1, key)] if fb else []
         if key == WORD_EVENT:
             phrases = recognized_phrases(value, self.cfg.word_confidence, key)

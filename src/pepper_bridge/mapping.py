@@ -146,15 +146,21 @@ def touch_feedback(value: Any, source: str = "touch") -> int:
 # 2.9 has no page of its own: it keeps the 2.8 scale here (docs/PEPPER.md says so).
 EMOTION_SCALES = {"2.1": 5, "2.3": 5, "2.4": 5, "2.5": 10, "2.7": 10, "2.8": 10, "2.9": 10}
 EMOTION_SHAPE = "[[matched index, matched level], [calm, anger, joy, sorrow, laughter], excitement]"
-DEFAULT_NAOQI = "2.5"
+DEFAULT_NAOQI = "2.5"  # the scale read until the robot says otherwise (and anger_threshold's with "auto")
+AUTO_NAOQI = "auto"  # config / parameter value: ask the robot (ALSystem.systemVersion)
 
 
 def emotion_scale(version: str) -> int:
     """The top of the emotion levels' scale for a NAOqi version ("2.5", "2.5.5.5", ...)."""
-    key = ".".join(str(version).strip().split(".")[:2])
+    key = naoqi_release(version)
     if key not in EMOTION_SCALES:
         raise ValueError(f"unknown NAOqi version {version!r} (known: {', '.join(EMOTION_SCALES)})")
     return EMOTION_SCALES[key]
+
+
+def naoqi_release(version: str) -> str:
+    """ "2.5.5.5" -> "2.5" (ALSystem.systemVersion answers the full version string)."""
+    return ".".join(str(version).strip().split(".")[:2])
 
 
 def _level(source: str, value: Any, whole: Any, what: str, top: int) -> int:

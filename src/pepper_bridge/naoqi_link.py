@@ -29,7 +29,7 @@ import qi
 from .config import LinkSettings
 
 SERVICES = ("ALMemory", "ALBattery", "ALMotion", "ALNavigation", "ALTextToSpeech", "ALSpeechRecognition",
-            "ALVoiceEmotionAnalysis", "ALPeoplePerception", "ALEngagementZones")
+            "ALVoiceEmotionAnalysis", "ALPeoplePerception", "ALEngagementZones", "ALSystem")
 REQUIRED = ("ALMemory", "ALMotion", "ALTextToSpeech")
 CLIENT_NAME = "homeo_pepper_bridge"
 _MISSING = object()
@@ -156,6 +156,8 @@ class NaoqiLink:
         if fut.hasError():
             err = fut.error()
             self._check_session(f"{what}: {err}")
+            if self.connected and _is_lost(err):  # the robot closing: its services go before the socket does
+                self._lost(f"{what}: {_first_line(err)}")
             if not self.connected:
                 raise RobotUnavailable(f"robot dropped during {what}")
             raise RuntimeError(err)
@@ -343,6 +345,18 @@ def _cancel(fut) -> None:
         fut.cancel()
     except RuntimeError:
         pass
+
+
+# libqi's errors for a call cut by the connection (not the robot's answer): the session is gone
+_LOST = ("service removed", "socket", "disconnected", "not connected", "connection closed", "endpoint")
+
+
+def _is_lost(err) -> bool:
+    return any(w in str(err).lower() for w in _LOST)
+
+
+def _first_line(err) -> str:
+    return str(err).strip().splitlines()[0] if str(err).strip() else "error"
 
 
 def _msg(exc: BaseException) -> str:

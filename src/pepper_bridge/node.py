@@ -67,7 +67,7 @@ class BridgeNode(ScenarioNode):
         from .bridge import PepperBridge
         from .config import DEFAULT_URL, ConfigError, LinkSettings, load_config
         from .environment import PepperEnvironment
-        from .mapping import emotion_scale
+        from .mapping import AUTO_NAOQI, emotion_scale
         from .world_side import PepperWorldSide
 
         qi.logging.setLevel(qi.logging.WARNING)
@@ -87,10 +87,12 @@ class BridgeNode(ScenarioNode):
         self.declare_parameter("action_timeout", 5.0, _float(0.01, 3600.0, "seconds to wait for an action before the "
                                                                           "interaction counts as no action"))
         self.declare_parameter("anger_threshold", -1.0, _float(-1.0, 10.0, "voice anger level above this is a scolding, "
-                                                                    "on the robot's 0..10 (NAOqi 2.5+) or 0..5 (2.1/2.4) "
-                                                                    "scale (-1 = the config's)"))
+                                                                    "on naoqi_version's scale: 0..10 (NAOqi 2.5+, and "
+                                                                    "auto, rescaled to the robot's) or 0..5 (2.1/2.4) "
+                                                                    "(-1 = the config's)"))
         self.declare_fixed("naoqi_version", "", D(description="the robot's NAOqi version, for its documented "
-                                                                  "formats ('' = the config's)"))
+                                                                  "formats: auto = ask the robot (ALSystem."
+                                                                  "systemVersion); '' = the config's"))
         self.declare_parameter("word_confidence", 0.4, _float(0.0, 1.0, "lowest confidence of a recognised word"))
         self.declare_parameter("intention_cues", True, D(
             description="put the intention recognised from the config's keyword/gesture cues in the observation "
@@ -111,15 +113,16 @@ class BridgeNode(ScenarioNode):
         except ConfigError as exc:
             raise NodeConfigError(str(exc)) from None
         if p("naoqi_version"):
-            try:
-                emotion_scale(p("naoqi_version"))
-            except ValueError as exc:
-                raise NodeConfigError(f"parameter naoqi_version: {exc}") from None
+            if p("naoqi_version") != AUTO_NAOQI:
+                try:
+                    emotion_scale(p("naoqi_version"))
+                except ValueError as exc:
+                    raise NodeConfigError(f"parameter naoqi_version: {exc} or {AUTO_NAOQI!r}") from None
             cfg.naoqi_version = p("naoqi_version")
         if p("anger_threshold") >= 0:
-            if p("anger_threshold") >= cfg.emotion_scale:
+            if p("anger_threshold") >= cfg.threshold_scale:
                 raise NodeConfigError(f"parameter anger_threshold: {p('anger_threshold')} is not below the top of "
-                                      f"NAOqi {cfg.naoqi_version}'s anger scale 0..{cfg.emotion_scale}")
+                                      f"its scale 0..{cfg.threshold_scale} (naoqi_version {cfg.naoqi_version})")
             cfg.anger_threshold = p("anger_threshold")
         cfg.word_confidence = p("word_confidence")
         settings = LinkSettings(url=p("qi_url"), user=p("user") or None, password=p("password") or None,
@@ -185,9 +188,10 @@ class BridgeNode(ScenarioNode):
             elif prm.name == "action_timeout":
                 self.driver.timeout = prm.value
             elif prm.name == "anger_threshold":
-                if prm.value >= cfg.emotion_scale:
+                if prm.value >= cfg.threshold_scale:
                     return SetParametersResult(successful=False, reason=f"anger_threshold must be below "
-                                                                        f"{cfg.emotion_scale} (NAOqi {cfg.naoqi_version})")
+                                                                        f"{cfg.threshold_scale} (naoqi_version "
+                                                                        f"{cfg.naoqi_version})")
                 if prm.value >= 0:
                     cfg.anger_threshold = prm.value  # the event parser reads it per event
             elif prm.name == "word_confidence":
@@ -271,6 +275,9 @@ class BridgeNode(ScenarioNode):
                   "url": str(link.get("url")), "reason": str(link.get("reason")), "connects": str(link.get("connects")),
                   "drops": str(link.get("drops")), "freezes": str(link.get("freezes", 0)), "polled_keys": str(len(link.get("polled_keys") or [])),
                   "rejected_total": str(snap["rejected_total"])}
+        naoqi = self.bridge.naoqi()
+        values.update({"naoqi_version": f"{naoqi['version']} ({naoqi['source']})",
+                       "emotion_scale": f"0..{naoqi['emotion_scale']}", "anger_level": f"{naoqi['anger_level']:g}"})
         values.update({f"rejected {s}": str(n) for s, n in sorted(snap["rejected_by_source"].items())})
         values.update({f"incident {s}": str(n) for s, n in sorted(snap["incidents"].items())})
         values.update({f"unknown {ch} symbols": str(n) for ch, n in sorted(self.env.dropped.items())})

@@ -11,8 +11,9 @@ Services (NAOqi method names):
 - ``ALTextToSpeech``: say(text).
 - ``ALSpeechRecognition``: setLanguage, setVocabulary, pause, subscribe, unsubscribe.
 - ``ALVoiceEmotionAnalysis``: subscribe, unsubscribe.
+- ``ALSystem``: systemVersion (``naoqi_version``, e.g. "2.5.5.5"; the user's voices are on its scale), robotName.
 - ``HomeoStandin`` (not NAOqi; for tests and the CLI): calls, clearCalls, inject, clearInjections,
-  setBatteryOverride, dropFor, state, userLog.
+  setBatteryOverride, dropFor, freezeFor, state, userLog.
 
 The simulated body (per simulated second; every motion / speech / rest call also lasts
 ``action_seconds`` simulated seconds, so a run at ``time_scale`` 0 is reproducible):
@@ -47,12 +48,13 @@ import qi
 from homeo_decision.rng import component_rng
 
 from .config import PepperConfig, load_config
-from .mapping import (BATTERY_KEY, EMOTION_EVENT, PEOPLE_KEY, PEPPER_JOINTS, PLUGGED_KEY, TOUCH_EVENTS, WORD_EVENT,
-                      ZONE_KEYS, temperature_key)
+from .mapping import (AUTO_NAOQI, BATTERY_KEY, EMOTION_EVENT, PEOPLE_KEY, PEPPER_JOINTS, PLUGGED_KEY, TOUCH_EVENTS,
+                      WORD_EVENT, ZONE_KEYS, emotion_scale, temperature_key)
 from .user import ScriptedUser, load_script, timed_entry_emits
 
 MOTION_JOINTS = ("HipRoll", "HipPitch", "KneePitch", "WheelFL", "WheelFR", "WheelB")
 PERSON_ID = 17
+STANDIN_NAOQI = "2.5.5.5"  # what ALSystem.systemVersion answers when neither the config nor the caller fixes it
 
 
 @dataclass
@@ -80,7 +82,7 @@ class StandinRobot:
     def __init__(self, config: PepperConfig | None = None, script: dict | None = None, *, seed: int = 0,
                  battery: float | None = None, time_scale: float = 1.0, listen: str = "tcp://127.0.0.1:0",
                  refuse_subscriber: bool = False, body: BodyParams | None = None, desired: dict | None = None,
-                 scenario=None, clock=time.monotonic):
+                 scenario=None, clock=time.monotonic, naoqi_version: str | None = None):
         self.cfg = config or load_config()
         self.script = script or {"schema": "homeo-pepper-user", "version": 1}
         self.rng = component_rng(seed, "standin")
@@ -89,6 +91,10 @@ class StandinRobot:
         self.refuse_subscriber = refuse_subscriber
         self.p = body or BodyParams()
         self.clock = clock
+        # the version this robot runs: its voices follow that version's documented scale
+        self.naoqi_version = naoqi_version or (self.cfg.naoqi_version if self.cfg.naoqi_version != AUTO_NAOQI
+                                               else STANDIN_NAOQI)
+        self.emotion_scale = emotion_scale(self.naoqi_version)
         self.lock = threading.RLock()
         self._calls: collections.deque = collections.deque(maxlen=20000)
         self.data: dict[str, Any] = {}
@@ -115,7 +121,7 @@ class StandinRobot:
         self.user = ScriptedUser(self.script, desired, self.cfg.gesture_event, self.cfg.movement_event,
                                  plug_actions=self.cfg.plug_actions(),
                                  plug_place=(scenario.objects.get(plug_obj) or {}).get("location"),
-                                 emotion_scale=self.cfg.emotion_scale,
+                                 emotion_scale=self.emotion_scale,
                                  spoken={act: phrase for phrase, act in reversed(list(self.cfg.proposals.items()))})
         self.phrases = self.cfg.phrase_actions()
         self._last = clock()
@@ -125,6 +131,8 @@ class StandinRobot:
         self._thawed = threading.Event()  # cleared while frozen
         self._thawed.set()
         self._timed_thread: threading.Thread | None = None
+        self._item_applied = -1  # the user interaction whose "robot" body settings were applied
+        self._faulted: set = set()  # user interactions whose drop / freeze has happened
         self._services = self._make_services()
 
     # -- session lifecycle ----------------------------------------------------------
@@ -311,14 +319,43 @@ class StandinRobot:
         r = self.user.react(action, self.location)
         if r.plug is not None:
             self.plugged = r.plug
+        self._apply_item()
         self._publish()
         return r.emits
+
+    def _apply_item(self) -> None:
+        """Lock held: the current interaction's ``robot`` body settings (heat, battery_percent), once."""
+        if self.user.index == self._item_applied:
+            return
+        self._item_applied = self.user.index
+        r = (self.user.current or {}).get("robot") or {}
+        if "heat" in r:
+            self.heat = min(3.99, max(0.0, float(r["heat"])))
+        if "battery_percent" in r:
+            self.battery = min(100.0, max(0.0, float(r["battery_percent"])))
+
+    def _script_fault(self) -> None:
+        """At the start of an action: the current interaction's ``robot`` drop / freeze, once. The action is
+        not performed (a robot that froze or dropped mid-call); the call raises once the robot is back."""
+        with self.lock:
+            r = (self.user.current or {}).get("robot") or {}
+            if not self.user.started or self.user.index in self._faulted or not ({"drop", "freeze"} & set(r)):
+                return
+            self._faulted.add(self.user.index)
+        if "freeze" in r:
+            self.freeze_for(float(r["freeze"]))
+            self._thawed.wait()
+            raise RuntimeError("the robot froze during this call")
+        threading.Timer(0.05, self.drop_for, args=(float(r["drop"]),)).start()  # not from inside the call
+        self._stop.wait(1.0)
+        raise RuntimeError("the robot dropped during this call")
 
     def start_user(self) -> None:
         with self.lock:
             if self.user.started:
                 return
             emits = self.user.start()
+            self._apply_item()
             self._publish()
             timed = sorted(self.script.get("timed", []), key=lambda e: e["at"])
         self.emit(emits)
@@ -335,7 +372,7 @@ class StandinRobot:
                 if "presence" in e:
                     self.user.present = e["presence"] == "present"
                     self._publish()
-            self.emit(timed_entry_emits(e, self.cfg.gesture_event, self.cfg.movement_event, self.cfg.emotion_scale))
+            self.emit(timed_entry_emits(e, self.cfg.gesture_event, self.cfg.movement_event, self.emotion_scale))
 
     # -- services -------------------------------------------------------------------
     def _make_services(self) -> dict:
@@ -420,6 +457,7 @@ class StandinRobot:
             @qi.bind(qi.Void, [])
             def rest(self):
                 robot.record("ALMotion", "rest")
+                robot._script_fault()
                 with robot.lock:
                     robot._advance()
                     robot.awake = False
@@ -447,6 +485,7 @@ class StandinRobot:
             @qi.bind(qi.Void, [qi.String])
             def say(self, text):
                 robot.record("ALTextToSpeech", "say", text)
+                robot._script_fault()
                 with robot.lock:
                     robot._advance()
                     emits = robot._user_saw(robot.phrases.get(text))  # e.g. plugged in when asked for help
@@ -505,6 +544,17 @@ class StandinRobot:
             def unsubscribe(self, name):
                 robot.record("ALVoiceEmotionAnalysis", "unsubscribe", name)
 
+        class ALSystem:  # NAOqi SDK ALSystemProxy: std::string systemVersion() "running system version"
+            @qi.bind(qi.String, [])
+            def systemVersion(self):
+                robot.record("ALSystem", "systemVersion")
+                return robot.naoqi_version
+
+            @qi.bind(qi.String, [])
+            def robotName(self):
+                robot.record("ALSystem", "robotName")
+                return "standin"
+
         class HomeoStandin:
             @qi.bind(qi.Dynamic, [])
             def calls(self):
@@ -546,9 +596,10 @@ class StandinRobot:
         return {"ALMemory": ALMemory(), "ALBattery": ALBattery(), "ALMotion": ALMotion(), "ALNavigation": ALNavigation(),
                 "ALTextToSpeech": ALTextToSpeech(), "ALSpeechRecognition": ALSpeechRecognition(),
                 "ALVoiceEmotionAnalysis": ALVoiceEmotionAnalysis(), "ALPeoplePerception": ALPeoplePerception(),
-                "ALEngagementZones": ALEngagementZones(), "HomeoStandin": HomeoStandin()}
+                "ALEngagementZones": ALEngagementZones(), "ALSystem": ALSystem(), "HomeoStandin": HomeoStandin()}
 
     def _motion(self, x: float, y: float) -> bool:
+        self._script_fault()
         with self.lock:
             self._advance()
             if not self.awake:
@@ -625,6 +676,8 @@ def main(argv=None) -> int:
     ap.add_argument("--battery", type=float, help="initial battery percentage (overrides the script)")
     ap.add_argument("--time-scale", type=float, default=1.0, help="simulated seconds per wall second (0 freezes time)")
     ap.add_argument("--refuse-subscriber", action="store_true", help="refuse ALMemory.subscriber (clients must poll)")
+    ap.add_argument("--naoqi-version", help=f"what ALSystem.systemVersion answers; the user's voices follow its scale "
+                                            f"(default: the config's naoqi_version, or {STANDIN_NAOQI} when auto)")
     a = ap.parse_args(argv)
     if a.battery is not None and not 0 <= a.battery <= 100:
         ap.error("--battery must be in [0, 100]")
@@ -635,8 +688,14 @@ def main(argv=None) -> int:
     qi.logging.setLevel(qi.logging.ERROR)  # libqi logs to stdout; the URL must be the first line
     cfg = load_config(a.config)
     script = load_script(a.script) if a.script else None
+    if a.naoqi_version:
+        try:
+            emotion_scale(a.naoqi_version)
+        except ValueError as exc:
+            ap.error(f"--naoqi-version: {exc}")
     robot = StandinRobot(cfg, script, seed=a.seed, battery=a.battery, time_scale=a.time_scale,
-                         listen=_loopback_only(a.listen), refuse_subscriber=a.refuse_subscriber)
+                         listen=_loopback_only(a.listen), refuse_subscriber=a.refuse_subscriber,
+                         naoqi_version=a.naoqi_version)
     url = robot.start()
     print(url, flush=True)
     try:

@@ -21,12 +21,20 @@ angry voice (``EmotionRecognized`` in the documented shape, anger level ``anger`
 scale: default 8 of 10, e.g. ``[[2, 8], [1, 8, 0, 0, 0], 7]``) otherwise when ``scold``
 (default true), with the proposal spoken (``WordRecognized``) when ``propose`` (default
 true). A missed intention is expressed again, up to ``patience`` attempts (default 1). An
-interaction with ``"intention": null`` expresses nothing and answers nothing. ``presence``
+interaction with ``"intention": null`` expresses nothing and answers nothing; ``calm`` (a level, e.g. 6)
+adds a calm voice to the answer (``[[1, 6], [6, 1, 0, 0, 0], 1]`` on 0..10: not a scolding). ``presence``
 ("present" / "absent") moves the user before expressing. ``helps`` (default true, per interaction or for the whole
 file): asked for help with the plug (an action of the config that sets the plug variable: the thesis's
 Attach / Detach), the user plugs / unplugs the robot when it stands where the plugged object is (the charger). ``start`` sets the stand-in body; ``robot`` holds the robot's initial internal
 drives for the field driver. Timed entries fire at ``at`` wall seconds after the user starts
 (when the robot first starts its speech recognition).
+
+An interaction may also script the robot (the stand-in, not the user): ``"robot": {"heat": 2.5,
+"battery_percent": 20, "drop": 10, "freeze": 20}``. ``heat`` / ``battery_percent`` set the body when
+the interaction starts (joint temperature status is floor(heat) on the legs and wheels);
+``drop`` / ``freeze`` (seconds): as the robot starts its first action of this interaction, it drops
+its connection (and comes back on the same URL) or stops answering with the connection open; that
+action is not performed, and the user waits for the next one.
 """
 
 from __future__ import annotations
@@ -40,6 +48,7 @@ from .mapping import EMOTION_EVENT, TOUCH_EVENTS, WORD_EVENT, voice
 
 SCHEMA = "homeo-pepper-user"
 VERSION = 1
+ROBOT_LIMITS = {"heat": 3.99, "battery_percent": 100, "drop": 600, "freeze": 600}  # an interaction's "robot" keys
 
 
 class ScriptError(ValueError):
@@ -116,6 +125,8 @@ class ScriptedUser:
         emits: list = []
         row = {"interaction": len(self.log) + 1, "item": self.index, "intention": intention, "action": action, "satisfied": None,
                "feedback": 0, "proposal": None}
+        if it.get("calm") is not None:  # a calm answer (documented scale): no scolding
+            emits.append((EMOTION_EVENT, calm_voice(it["calm"], self.emotion_scale)))
         if intention is None:
             self._next()
         elif action in self.desired.get(intention, ()):
@@ -209,6 +220,12 @@ def validate_script(raw: Any, where: str = "<memory>", intentions: tuple | None 
             raise ScriptError(f"{where}: interaction {k + 1}: unknown intention {it['intention']!r}")
         if it.get("presence", "present") not in ("present", "absent"):
             raise ScriptError(f"{where}: interaction {k + 1}: presence must be 'present' or 'absent'")
+        rob = it.get("robot", {})
+        if not isinstance(rob, dict) or set(rob) - set(ROBOT_LIMITS) or not all(
+                isinstance(v, (int, float)) and not isinstance(v, bool) and 0 <= v <= ROBOT_LIMITS[key]
+                for key, v in rob.items()):
+            raise ScriptError(f"{where}: interaction {k + 1}: robot must map "
+                              + ", ".join(f"{key} to 0..{top}" for key, top in ROBOT_LIMITS.items()))
     timed = raw.get("timed", [])
     if not isinstance(timed, list) or not all(isinstance(t, dict) and isinstance(t.get("at"), (int, float)) for t in timed):
         raise ScriptError(f"{where}: 'timed' entries need a number 'at'")

@@ -62,7 +62,7 @@ class PepperWorldSide:
         link = self.env.bridge.status()
         return {"extra": {"log": list(self.log), "interactions_done": self.env.tick,
                           "robot": {k: link.get(k) for k in ("state", "connected", "reason", "url", "connects", "drops", "freezes")},
-                          "robot_missed": sum(1 for r in self.log if r.get("missed"))}}
+                          "robot_missed": sum(1 for r in self.log if r.get("missed")), "naoqi": self.env.bridge.naoqi()}}
 
     # -- helpers ---------------------------------------------------------------------------
     def _row(self, action_fields: dict | None) -> None:
@@ -70,6 +70,7 @@ class PepperWorldSide:
         f = action_fields or {}
         rec = f.get("intention")  # what the decision acted on (the recogniser's), else what the cues named
         r["m_dom"] = f.get("m_dom")
+        r["drives"] = f.get("drives")  # the drives the decision chose with (the body's, read this tick)
         r["intention"] = (None if rec == self.sc.intention_names[0] else rec) if rec is not None else r["cue_intention"]
         self.log.append(r)
         del self.log[:-MAX_LOG_ROWS]
