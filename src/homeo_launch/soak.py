@@ -1,8 +1,9 @@
 """``homeo-launch soak``: is a long run as cheap per tick, and as small, at its end as at its start?
 
-Two parts, each optional:
+Three parts, each optional:
 - in-process: ``--iterations`` ticks (default 1,000,000) of the thesis simulation
   (``homeo_sim.runner.Simulation``, oracle recognition) in this process;
+- ``--bus`` ticks of the graph's own code on an in-memory bus (no DDS, one process);
 - the graph: ``--ticks`` ticks (default 200,000) of ``homeo-launch sim`` (Bayesian recognition,
   checkpoints every 100 ticks into a temporary folder), every node process watched from here.
 
@@ -106,6 +107,59 @@ def _summary(mem, cpu, n) -> dict:
             "last_over_first": last / first if first else float("nan")}
 
 
+def soak_bus(ticks: int, seed: int = 0, progress=None) -> dict:
+    """The graph's own code without DDS: the world node's driver and side and the three robot
+    nodes' hosts in this process, every message encoded, decoded and joined as the nodes do, passed
+    in order (tests/test_graph_stages.py's bus, unshuffled). Tells the code's cost apart from
+    rclpy's and the machine's."""
+    from homeo_decision.agent import DecisionCore
+    from homeo_decision.codec import vocabulary
+    from homeo_decision.hosts import DecisionHost, PerceptionHost
+    from homeo_decision.scenario import load_scenario
+    from homeo_intention.recognition import RecognitionHost
+    from homeo_msgs_py.graph import BAYES, GRAPHS, NODES, TOPICS
+    from homeo_msgs_py.lockstep import DONE, LockstepDriver
+    from homeo_msgs_py.schemas import decode, encode
+    from homeo_sim.world_side import SimWorldSide
+
+    sc = load_scenario()
+    voc = vocabulary(sc)
+    queue: list = []
+    send = lambda key, tick, fields, run=0: queue.append((key, encode(TOPICS[key].schema, tick, fields, run=run)))  # noqa: E731
+    side = SimWorldSide(sc, seed, intention_accuracy=True)
+    driver = LockstepDriver(side, send, iterations=ticks)
+    hosts = {"homeo_intention": RecognitionHost(sc, BAYES), "homeo_drives": PerceptionHost(sc),
+             "homeo_decision": DecisionHost(sc, DecisionCore(sc, seed))}
+    readers: dict = {}
+    for n in GRAPHS["sim"]:
+        for i in NODES[n].reads(True):
+            readers.setdefault(i.topic, []).append(n)
+    every, mem_every = max(1, ticks // 100), max(1, ticks // SAMPLES)
+    times, cpu, mem = [(0, time.perf_counter())], [(0, time.process_time())], [(0, rss_mb())]
+    driver.begin()
+    while driver.state != DONE:
+        batch, queue[:] = list(queue), []
+        for key, text in batch:
+            m = decode(text, voc)
+            for n in readers.get(key, []):
+                if n == "homeo_sim":
+                    driver.on_action(m)
+                    continue
+                for k, fields in hosts[n].stage.put(key, m):
+                    send(NODES[n].publishes[0], k, fields)
+        k = driver.tick
+        if k >= times[-1][0] + every:
+            times.append((k, time.perf_counter()))
+            cpu.append((k, time.process_time()))
+            side.status(False)  # the metrics, as the node publishes them
+            if progress is not None:
+                progress(k)
+        if k >= mem[-1][0] + mem_every:
+            mem.append((k, rss_mb()))
+    return {"ticks": ticks, "HSR": side.status(True)["metrics"]["HSR"], "wall_s_per_tick": list(per_tick_ends(times, ticks)),
+            "processes": {"graph code, no DDS (in-process)": _summary(mem, cpu, ticks)}}
+
+
 def soak_graph(ticks: int, seed: int = 0, progress=None) -> dict:
     from .sim import SimOptions, run_graph
 
@@ -142,7 +196,7 @@ def soak_graph(ticks: int, seed: int = 0, progress=None) -> dict:
             progress(tick)
 
     with tempfile.TemporaryDirectory(prefix="homeo-soak-") as tmp:
-        o = SimOptions(iterations=ticks, seed=seed, checkpoint_dir=tmp)
+        o = SimOptions(iterations=ticks, seed=seed, data_dir=tmp, checkpoint_dir=os.path.join(tmp, "checkpoints"))
         status = run_graph(o, quiet=True, on_progress=on_progress, on_start=on_start)
     return {"ticks": ticks, "missed": status.get("missed"), "restarts": status.get("restarts", {}),
             "HSR": status["metrics"]["HSR"], "wall_s_per_tick": list(per_tick_ends(times, ticks)),
@@ -153,10 +207,10 @@ def format_part(title: str, part: dict) -> str:
     w0, w1 = part["wall_s_per_tick"]
     lines = [f"{title}: {part['ticks']} ticks (HSR {part['HSR']:.3f}); wall clock per tick: first 10% "
              f"{w0 * 1e3:.4f} ms, last 10% {w1 * 1e3:.4f} ms (ratio {w1 / w0:.3f})",
-             f"  {'process':24} {'RSS start':>10} {'RSS end':>9} {'MB/10k':>8} {'CPU ms/tick first':>18} "
+             f"  {'process':32} {'RSS start':>10} {'RSS end':>9} {'MB/10k':>8} {'CPU ms/tick first':>18} "
              f"{'last':>7} {'last/first':>10}"]
     for name, s in part["processes"].items():
-        lines.append(f"  {name:24} {s['rss_start_mb']:9.1f}M {s['rss_end_mb']:8.1f}M {s['slope_mb_per_10k']:8.3f} "
+        lines.append(f"  {name:32} {s['rss_start_mb']:9.1f}M {s['rss_end_mb']:8.1f}M {s['slope_mb_per_10k']:8.3f} "
                      f"{s['cpu_s_per_tick_first'] * 1e3:18.4f} {s['cpu_s_per_tick_last'] * 1e3:7.4f} "
                      f"{s['last_over_first']:10.3f}")
     return "\n".join(lines)
@@ -165,7 +219,7 @@ def format_part(title: str, part: dict) -> str:
 def cmd_soak(a) -> int:
     from homeo_msgs_py.cli_args import UserError
 
-    for opt, v in (("--iterations", a.iterations), ("--ticks", a.ticks)):
+    for opt, v in (("--iterations", a.iterations), ("--bus", a.bus), ("--ticks", a.ticks)):
         if 0 < v < 100:
             raise UserError(f"{opt} {v}: at least 100 ticks (or 0 to skip)")
     out = {}
@@ -173,7 +227,7 @@ def cmd_soak(a) -> int:
     if not a.quiet:
         from tqdm import tqdm
 
-        bar = tqdm(total=a.iterations + a.ticks, unit="tick", file=sys.stderr, leave=False, desc="soak")
+        bar = tqdm(total=a.iterations + a.bus + a.ticks, unit="tick", file=sys.stderr, leave=False, desc="soak")
     base = [0]
 
     def progress(k):
@@ -185,6 +239,9 @@ def cmd_soak(a) -> int:
         if a.iterations:
             out["in_process"] = soak_in_process(a.iterations, a.seed, progress)
             base[0] = a.iterations
+        if a.bus:
+            out["bus"] = soak_bus(a.bus, a.seed, progress)
+            base[0] += a.bus
         if a.ticks:
             out["graph"] = soak_graph(a.ticks, a.seed, progress)
     finally:
@@ -195,7 +252,7 @@ def cmd_soak(a) -> int:
         return 0
     print("target: slope < 0.1 MB per 10,000 ticks, last/first time per tick < 1.1 (per process: CPU time, "
           "steadier than the wall clock on a shared machine; the wall clock of the whole run above each table)")
-    for key, title in (("in_process", "in-process"), ("graph", "graph")):
+    for key, title in (("in_process", "in-process"), ("bus", "graph code on an in-memory bus"), ("graph", "graph")):
         if key in out:
             print(format_part(title, out[key]))
     return 0
@@ -207,6 +264,9 @@ def add_parser(sub) -> None:
     s = sub.add_parser("soak", help="memory and time per tick over a long run, in-process and as a graph")
     s.add_argument("--iterations", type=int_at_least(0), default=1_000_000,
                    help="in-process ticks (default 1,000,000; 0 = skip)")
+    s.add_argument("--bus", type=int_at_least(0), default=0, metavar="TICKS",
+                   help="also run the graph's code (driver, hosts, encode/decode, joins) on an in-memory bus in "
+                        "this process for TICKS ticks: its cost without DDS (default 0 = skip)")
     s.add_argument("--ticks", type=int_at_least(0), default=200_000, help="graph ticks (default 200,000; 0 = skip)")
     s.add_argument("--seed", type=int_at_least(0), default=0)
     s.add_argument("--json", action="store_true")
