@@ -5,6 +5,10 @@ Every equation of the thesis stays as it is; only the values under ``open`` in
 ``src/homeo_decision/scenarios/thesis.json`` (``homeo_decision.scenario.OPEN_CHOICES`` plus the
 initial state) are searched. The script has three parts:
 
+  --joint        the joint search (issue 15): Optuna's TPE over every open choice at once on
+                 --search-seeds, the best few confirmed on --confirm-seeds (tools/joint_search.py):
+                     .venv/bin/python tools/calibrate.py --joint --trials 200 \
+                         --search-seeds 100-107 --confirm-seeds 200-219
   --search       the staged grid search (screening with --screen-seeds seeds), the
                  selection rule, then confirmation of the best candidates with
                  --seeds seeds and the trend checks;
@@ -480,9 +484,24 @@ def main(argv=None) -> int:
     ap.add_argument("--top1", type=int, default=8, help="structural settings refined in stage 1b")
     ap.add_argument("--top2", type=int, default=6, help="points expanded in stage 2")
     ap.add_argument("--confirm", type=int, default=8, help="candidates confirmed with --seeds seeds")
+    ap.add_argument("--joint", action="store_true",
+                    help="joint search with Optuna's TPE (tools/joint_search.py; needs tools/requirements-calibrate.lock)")
+    ap.add_argument("--trials", type=int, default=200, help="--joint: trials of the search (default 200)")
+    ap.add_argument("--search-seeds", default="100-107", metavar="A-B", help="--joint: seeds of the search (default 100-107)")
+    ap.add_argument("--confirm-seeds", default="200-219", metavar="C-D",
+                    help="--joint: seeds of the confirmation, never used in the search (default 200-219)")
+    ap.add_argument("--confirm-best", type=int, default=6, help="--joint: distinct best points confirmed (default 6)")
+    ap.add_argument("--sampler-seed", type=int, default=15, help="--joint: the TPE sampler's seed (default 15)")
+    ap.add_argument("--out", default="calibrate-joint", help="--joint: directory for trials.jsonl and joint.json")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                     help="start from the chosen configuration with this change (JSON value)")
     a = ap.parse_args(argv)
+    if a.joint:
+        import joint_search
+
+        joint_search.run(a.trials, a.search_seeds, a.confirm_seeds, a.confirm_best, a.sampler_seed, a.out,
+                         workers=min(a.workers, 1) if a.workers else 1)
+        return 0
     if not (a.search or a.table or a.trends or a.sensitivity or a.curves or a.probe_record_point):
         a.table = a.trends = a.sensitivity = True
     r = Runner(a.iterations, a.workers, a.cache)
