@@ -492,6 +492,8 @@ def main(argv=None) -> int:
                     help="--joint: seeds of the confirmation, never used in the search (default 200-219)")
     ap.add_argument("--confirm-best", type=int, default=6, help="--joint: distinct best points confirmed (default 6)")
     ap.add_argument("--sampler-seed", type=int, default=15, help="--joint: the TPE sampler's seed (default 15)")
+    ap.add_argument("--confirm-from", metavar="TRIALS.jsonl", default=None,
+                    help="--joint: skip the search, confirm the best points of this trials.jsonl")
     ap.add_argument("--out", default="calibrate-joint", help="--joint: directory for trials.jsonl and joint.json")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                     help="start from the chosen configuration with this change (JSON value)")
@@ -499,8 +501,12 @@ def main(argv=None) -> int:
     if a.joint:
         import joint_search
 
-        joint_search.run(a.trials, a.search_seeds, a.confirm_seeds, a.confirm_best, a.sampler_seed, a.out,
-                         workers=min(a.workers, 1) if a.workers else 1)
+        w = min(a.workers, 1) if a.workers else 1  # one process: the machine is shared
+        if a.confirm_from:
+            joint_search.confirm_from(a.confirm_from, a.search_seeds, a.confirm_seeds, a.confirm_best, a.sampler_seed,
+                                      a.out, workers=w)
+        else:
+            joint_search.run(a.trials, a.search_seeds, a.confirm_seeds, a.confirm_best, a.sampler_seed, a.out, workers=w)
         return 0
     if not (a.search or a.table or a.trends or a.sensitivity or a.curves or a.probe_record_point):
         a.table = a.trends = a.sensitivity = True

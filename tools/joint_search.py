@@ -225,7 +225,24 @@ def run(trials: int, search_seeds: str, confirm_seeds: str, n_confirm: int, samp
         return e["score"]
 
     study.optimize(objective, n_trials=trials)
-    t_search = time.time() - t0
+    log.close()
+    return confirm(evals, time.time() - t0, trials, s_seeds, c_seeds, n_confirm, sampler_seed, outp, workers)
+
+
+def confirm_from(path: str, search_seeds: str, confirm_seeds: str, n_confirm: int, sampler_seed: int, out: str,
+                 workers: int = 1) -> dict:
+    """The confirmation stage alone, from a search's ``trials.jsonl`` (e.g. a search stopped early:
+    with the same sampler seed its first N trials are those of ``--trials N``)."""
+    evals = [json.loads(line) for line in Path(path).read_text().splitlines() if line.strip()]
+    outp = Path(out)
+    outp.mkdir(parents=True, exist_ok=True)
+    return confirm(evals, None, len(evals), _seeds(search_seeds), _seeds(confirm_seeds), n_confirm, sampler_seed,
+                   outp, workers)
+
+
+def confirm(evals, t_search, trials, s_seeds, c_seeds, n_confirm, sampler_seed, outp: Path, workers: int) -> dict:
+    t0 = time.time()
+    start = current_open()
     # confirm the best few distinct points (and the current default) on seeds never searched
     ranked, seen = [], set()
     for e in sorted(evals, key=lambda e: -e["score"]):
@@ -246,7 +263,7 @@ def run(trials: int, search_seeds: str, confirm_seeds: str, n_confirm: int, samp
     chosen = select(conf)
     res = {"command": " ".join(sys.argv), "trials": trials, "search_seeds": s_seeds, "confirm_seeds": c_seeds,
            "sampler_seed": sampler_seed, "weights": {"trend": W_TREND, "distance": W_DIST, "text": W_TEXT},
-           "search_s": t_search, "total_s": time.time() - t0, "confirmed": conf, "chosen": chosen["open"],
+           "search_s": t_search, "confirm_s": time.time() - t0, "confirmed": conf, "chosen": chosen["open"],
            "current": start}
     (outp / "joint.json").write_text(json.dumps(res, indent=1, default=str))
     print_result(res)
@@ -264,9 +281,10 @@ def select(conf: list[dict]) -> dict:
 
 def print_result(res: dict) -> None:
     cur = res["current"]
+    took = f"{res['search_s'] / 60:.0f} min" if res["search_s"] else "time not recorded"
     print(f"\n{res['trials']} trials x {len(res['search_seeds'])} search seeds "
-          f"({res['search_seeds'][0]}-{res['search_seeds'][-1]}), {res['search_s'] / 60:.0f} min; confirmation on "
-          f"seeds {res['confirm_seeds'][0]}-{res['confirm_seeds'][-1]}; total {res['total_s'] / 60:.0f} min\n")
+          f"({res['search_seeds'][0]}-{res['search_seeds'][-1]}), {took}; confirmation on "
+          f"seeds {res['confirm_seeds'][0]}-{res['confirm_seeds'][-1]}, {res['confirm_s'] / 60:.0f} min\n")
     print("| trial | changes from the current default | text distance | Table 4.5 inside (search -> confirm) | "
           "statements met (search -> confirm) | trends | HSR | RSR | summed distance |")
     print("|---|---|---|---|---|---|---|---|---|")
