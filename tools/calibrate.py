@@ -53,22 +53,25 @@ DRIVES = _THESIS.drive_names
 # ---------------------------------------------------------------------------
 # the configuration this calibration recommends (the "open" block of thesis.json)
 
-CHOSEN: dict = {  # selected by --search (confirmation row 3); see docs/FIDELITY.md
+CHOSEN: dict = {  # chosen by the joint search of issue 15 (--joint, trial 103); see docs/FIDELITY.md
     "initial_drives": {"NAch": 0, "NSoc": 0, "NRes": 0, "NEng": 0},
     "initial_location": "R",
     "initial_objects": {"charger.status": "idle", "player.status": "idle", "light.status": "off"},
-    "initial_q": 0.0,
-    "scold_drive_change": 5,
+    "initial_q": 15.0,
+    "scold_drive_change": 2.0,
     "serving_growth": "unsatisfied",
-    "reward_span": "iteration",
+    "reward_span": "action",
     "on_leave_effects": True,
     "tie_break": "first",
     "value_max_over": "all",
-    "human_no_intention_prob": 0.55,
+    "metrics_sample": "end",
+    "invalid_actions": "excluded",
+    "always_valid_actions": [],
+    "human_no_intention_prob": 0.35,
     "human_leave_prob": 0.0,
     "human_return_prob": 1.0,
     "human_proposal_choice": "random",
-    "human_proposal_prob": 1.0,
+    "human_proposal_prob": 0.9,
 }
 
 # ---------------------------------------------------------------------------
@@ -257,7 +260,10 @@ ALTERNATIVES: list[tuple[str, list]] = [
     ("human_no_intention_prob", [0.0, 0.2, 0.4, 0.5, 0.6, 0.7]),
     ("human_leave_prob+human_return_prob", [(0.0, 1.0), (0.05, 0.5), (0.1, 0.2)]),
     ("human_proposal_choice", ["MoveToR", "MoveToC", "random"]),
-    ("human_proposal_prob", [1.0, 0.5, 0.0]),
+    ("human_proposal_prob", [1.0, 0.9, 0.5, 0.0]),
+    ("invalid_actions", ["excluded", "no_effect"]),  # issue 15
+    ("always_valid_actions", [[], ["Rest"], ["Chat"], ["Rest", "Chat"]]),  # issue 15
+    ("metrics_sample", ["end", "after_action"]),
     ("initial_drives", [{"NAch": 0, "NSoc": 0, "NRes": 0, "NEng": 0}, {"NAch": 50, "NSoc": 50, "NRes": 50, "NEng": 50},
                         {"NAch": 0, "NSoc": 0, "NRes": 0, "NEng": 90}]),
     ("initial_location", ["R", "H", "C"]),
