@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN     = $(VENV)/bin
 STAMP   = $(VENV)/.installed
 
-.PHONY: setup run test bench report clean
+.PHONY: setup run test bench report calibrate-setup clean
 
 setup: $(STAMP)
 
@@ -27,6 +27,10 @@ bench: setup
 
 report: setup
 	$(BIN)/homeo-sim report --out out/report --seeds 10
+
+# the joint search's tool dependency (tools/calibrate.py --joint; docs/FIDELITY.md), not the runtime's
+calibrate-setup: setup
+	$(BIN)/pip install --disable-pip-version-check -q --no-deps -r tools/requirements-calibrate.lock
 
 clean:
 	rm -rf $(VENV) build src/*.egg-info

@@ -263,3 +263,31 @@ def test_rule_policy_on_the_second_scenario_and_without_a_block(tmp_path, toy_ra
     p = tmp_path / "toy.json"
     p.write_text(json.dumps(toy_raw()))
     assert_one_line_error(cli("run", "--scenario", p, "--iterations", 20, "--policy", "rule"), "rule_policy", "toy.json")
+
+
+# -- --first-seed (issue 15: seeds that choose kept apart from seeds that confirm) ---------------
+
+def _json(proc):
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout)
+
+
+def test_first_seed_runs_seeds_n_to_n_plus_k_minus_1():
+    out = _json(cli("run", "--seeds", "2", "--first-seed", "3", "--iterations", "60", "--json", "--quiet", "--workers", "1"))
+    assert out["seeds"] == [3, 4]
+    one = _json(cli("run", "--seed", "4", "--iterations", "60", "--json"))
+    assert out["metrics"]["RSR"]["per_seed"][1] == one["metrics"]["RSR"]["mean"]
+    sw = _json(cli("sweep", "pseudo", "--seeds", "2", "--first-seed", "3", "--iterations", "60", "--json", "--quiet",
+                   "--workers", "1"))
+    assert sw["points"][0]["metrics"]["RSR"]["per_seed"] == out["metrics"]["RSR"]["per_seed"]
+
+
+@pytest.mark.parametrize("args, words", [
+    (("run", "--seeds", "2", "--first-seed", "-1"), ("--first-seed", "-1")),
+    (("run", "--seeds", "2", "--first-seed", "x"), ("--first-seed",)),
+    (("run", "--seed", "2", "--first-seed", "3"), ("--first-seed", "--seed")),
+    (("sweep", "xi", "--first-seed", "-2"), ("--first-seed",)),
+    (("report", "--out", "/tmp/never-written", "--first-seed", "1.5"), ("--first-seed",)),
+])
+def test_bad_first_seed_is_a_one_line_error(args, words):
+    assert_one_line_error(cli(*args, "--iterations", "10"), *words)

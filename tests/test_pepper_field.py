@@ -18,6 +18,7 @@ from pepper_bridge.user import load_script  # noqa: E402
 pytestmark = pytest.mark.qi
 qi.logging.setLevel(qi.logging.WARNING)
 SEEDS = (0, 1, 2)
+NEVER = 100  # first_attach of a robot that never plugs in during the session
 
 
 @pytest.fixture(scope="module")
@@ -42,7 +43,10 @@ def test_dedicated_satisfies_more_and_selfish_charges_earlier(qtables, thesis):
             s = res.summary()
             assert s["intentions"] == n - 2  # two pauses
             sat[res.label] += s["satisfied"]
-            attach[res.label] += s["first_attach"] or (s["interactions"] + 1)  # never = after the session
+            # never = one late mark, the same for both robots (it was the run's own length + 1, which differs
+            # between the two robots' runs: with issue 15's open block, where in 2 of the 3 seeds neither robot
+            # plugs in within the session, that difference alone decided the comparison)
+            attach[res.label] += s["first_attach"] or NEVER
     assert sat["dedicated"] > sat["selfish"], sat
     assert attach["selfish"] < attach["dedicated"], attach
 

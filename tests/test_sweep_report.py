@@ -126,11 +126,15 @@ def test_report_writes_pngs_and_markdown(tmp_path):
         assert (tmp_path / p).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     md = (tmp_path / "report.md").read_text()
     for needle in ("Table 4.5", "Fig 4.3", "Fig 4.4", "Fig 4.5", "Baselines", "adaptive DoD", "Trend checks",
-                   "| HSR | | ", " 0.82 |", "Wall time"):
+                   "| HSR | | ", " 0.82 |", "Wall time", "## Fidelity score", "| HSR | ", "inside CI; statements: "):
         assert needle in md, needle
     assert len(data["checks"]) == 9 and all(isinstance(c["ok"], bool) for c in data["checks"])
     assert all(c["why"] for c in data["checks"] if not c["ok"])  # a failing check always says why
     res = json.loads((tmp_path / "results.json").read_text())
+    f = res["fidelity"]  # issue 15: the fidelity score, 12 numbers of Table 4.5 and the 10 statements
+    assert f["table_total"] == 12 and f["statements_total"] == 10 and len(res["statements"]) == 10
+    assert f["summary"] == f"Table 4.5: {f['table_inside']}/12 inside CI; statements: {f['statements_met']}/10"
+    assert f["table_inside"] == sum(r["inside"] for r in f["table"]) and f"**{f['summary']}.**" in md
     assert res["policies"]["rule"]["metrics"]["HSR"]["per_seed"] == data["policies"]["rule"]["metrics"]["HSR"]["per_seed"]
 
 
@@ -156,7 +160,8 @@ def test_report_on_the_second_scenario_skips_the_thesis_comparisons(tmp_path):
     assert "no reference block" in md and "The thesis says" not in md and "What the thesis says" not in md
     assert "| thesis |" not in md and "CDA Duty" in md and "Baselines" in md and "threshold rules" in md
     res = json.loads((tmp_path / "results.json").read_text())
-    assert res["statements"] == [] and res["scenario"] == "garden"
+    assert res["statements"] == [] and res["scenario"] == "garden" and res["fidelity"]["table"] == []
+    assert "Fidelity score" not in md
     assert set(res["policies"]) == {"objectq", "random", "rule", "flatq", "nofeedback", "adaptive"}
     assert "CDA_Duty@500" in res["pseudo_early"]["on"]
     for png in ("fig4_1_drives.png", "fig4_4_pseudo.png", "fig4_5_dod.png", "baselines.png"):

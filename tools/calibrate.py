@@ -5,6 +5,10 @@ Every equation of the thesis stays as it is; only the values under ``open`` in
 ``src/homeo_decision/scenarios/thesis.json`` (``homeo_decision.scenario.OPEN_CHOICES`` plus the
 initial state) are searched. The script has three parts:
 
+  --joint        the joint search (issue 15): Optuna's TPE over every open choice at once on
+                 --search-seeds, the best few confirmed on --confirm-seeds (tools/joint_search.py):
+                     .venv/bin/python tools/calibrate.py --joint --trials 200 \
+                         --search-seeds 100-107 --confirm-seeds 200-219
   --search       the staged grid search (screening with --screen-seeds seeds), the
                  selection rule, then confirmation of the best candidates with
                  --seeds seeds and the trend checks;
@@ -49,22 +53,25 @@ DRIVES = _THESIS.drive_names
 # ---------------------------------------------------------------------------
 # the configuration this calibration recommends (the "open" block of thesis.json)
 
-CHOSEN: dict = {  # selected by --search (confirmation row 3); see docs/FIDELITY.md
+CHOSEN: dict = {  # chosen by the joint search of issue 15 (--joint, trial 103); see docs/FIDELITY.md
     "initial_drives": {"NAch": 0, "NSoc": 0, "NRes": 0, "NEng": 0},
     "initial_location": "R",
     "initial_objects": {"charger.status": "idle", "player.status": "idle", "light.status": "off"},
-    "initial_q": 0.0,
-    "scold_drive_change": 5,
+    "initial_q": 15.0,
+    "scold_drive_change": 2.0,
     "serving_growth": "unsatisfied",
-    "reward_span": "iteration",
+    "reward_span": "action",
     "on_leave_effects": True,
     "tie_break": "first",
     "value_max_over": "all",
-    "human_no_intention_prob": 0.55,
+    "metrics_sample": "end",
+    "invalid_actions": "excluded",
+    "always_valid_actions": [],
+    "human_no_intention_prob": 0.35,
     "human_leave_prob": 0.0,
     "human_return_prob": 1.0,
     "human_proposal_choice": "random",
-    "human_proposal_prob": 1.0,
+    "human_proposal_prob": 0.9,
 }
 
 # ---------------------------------------------------------------------------
@@ -253,7 +260,10 @@ ALTERNATIVES: list[tuple[str, list]] = [
     ("human_no_intention_prob", [0.0, 0.2, 0.4, 0.5, 0.6, 0.7]),
     ("human_leave_prob+human_return_prob", [(0.0, 1.0), (0.05, 0.5), (0.1, 0.2)]),
     ("human_proposal_choice", ["MoveToR", "MoveToC", "random"]),
-    ("human_proposal_prob", [1.0, 0.5, 0.0]),
+    ("human_proposal_prob", [1.0, 0.9, 0.5, 0.0]),
+    ("invalid_actions", ["excluded", "no_effect"]),  # issue 15
+    ("always_valid_actions", [[], ["Rest"], ["Chat"], ["Rest", "Chat"]]),  # issue 15
+    ("metrics_sample", ["end", "after_action"]),
     ("initial_drives", [{"NAch": 0, "NSoc": 0, "NRes": 0, "NEng": 0}, {"NAch": 50, "NSoc": 50, "NRes": 50, "NEng": 50},
                         {"NAch": 0, "NSoc": 0, "NRes": 0, "NEng": 90}]),
     ("initial_location", ["R", "H", "C"]),
@@ -480,9 +490,30 @@ def main(argv=None) -> int:
     ap.add_argument("--top1", type=int, default=8, help="structural settings refined in stage 1b")
     ap.add_argument("--top2", type=int, default=6, help="points expanded in stage 2")
     ap.add_argument("--confirm", type=int, default=8, help="candidates confirmed with --seeds seeds")
+    ap.add_argument("--joint", action="store_true",
+                    help="joint search with Optuna's TPE (tools/joint_search.py; needs tools/requirements-calibrate.lock)")
+    ap.add_argument("--trials", type=int, default=200, help="--joint: trials of the search (default 200)")
+    ap.add_argument("--search-seeds", default="100-107", metavar="A-B", help="--joint: seeds of the search (default 100-107)")
+    ap.add_argument("--confirm-seeds", default="200-219", metavar="C-D",
+                    help="--joint: seeds of the confirmation, never used in the search (default 200-219)")
+    ap.add_argument("--confirm-best", type=int, default=6, help="--joint: distinct best points confirmed (default 6)")
+    ap.add_argument("--sampler-seed", type=int, default=15, help="--joint: the TPE sampler's seed (default 15)")
+    ap.add_argument("--confirm-from", metavar="TRIALS.jsonl", default=None,
+                    help="--joint: skip the search, confirm the best points of this trials.jsonl")
+    ap.add_argument("--out", default="calibrate-joint", help="--joint: directory for trials.jsonl and joint.json")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                     help="start from the chosen configuration with this change (JSON value)")
     a = ap.parse_args(argv)
+    if a.joint:
+        import joint_search
+
+        w = min(a.workers, 1) if a.workers else 1  # one process: the machine is shared
+        if a.confirm_from:
+            joint_search.confirm_from(a.confirm_from, a.search_seeds, a.confirm_seeds, a.confirm_best, a.sampler_seed,
+                                      a.out, workers=w)
+        else:
+            joint_search.run(a.trials, a.search_seeds, a.confirm_seeds, a.confirm_best, a.sampler_seed, a.out, workers=w)
+        return 0
     if not (a.search or a.table or a.trends or a.sensitivity or a.curves or a.probe_record_point):
         a.table = a.trends = a.sensitivity = True
     r = Runner(a.iterations, a.workers, a.cache)

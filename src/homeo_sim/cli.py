@@ -1,12 +1,12 @@
 """``homeo-sim``: the in-process thesis simulation, its metrics, and its benchmark.
 
-    homeo-sim run [--iterations N] [--seed S | --seeds K] [--dod X] [--xi X] [--no-pseudo]
+    homeo-sim run [--iterations N] [--seed S | --seeds K [--first-seed N]] [--dod X] [--xi X] [--no-pseudo]
                   [--policy {objectq,random,rule,flatq,nofeedback}] [--adaptive-dod]
                   [--scenario FILE] [--set KEY=VALUE ...] [--save-q FILE] [--load-q FILE]
                   [--trace FILE] [--json] [--workers W] [--quiet]
                   [--intention {oracle,bayes}] [--save-intention FILE] [--load-intention FILE]
-    homeo-sim sweep {xi,dod,pseudo} [--seeds K] [--iterations N] [--out DIR] [--json] [--workers W] [--quiet]
-    homeo-sim report --out DIR [--seeds K] [--iterations N] [--workers W] [--quiet]
+    homeo-sim sweep {xi,dod,pseudo} [--seeds K] [--first-seed N] [--iterations N] [--out DIR] [--json] [--workers W] [--quiet]
+    homeo-sim report --out DIR [--seeds K] [--first-seed N] [--iterations N] [--workers W] [--quiet]
     homeo-sim bench [--intention {oracle,bayes}] [--json]
 """
 
@@ -41,11 +41,22 @@ def add_run_arguments(p: argparse.ArgumentParser) -> None:
     g = p.add_mutually_exclusive_group()
     g.add_argument("--seed", type=int_at_least(0), default=None, help="one run with this seed (default 0)")
     g.add_argument("--seeds", type=int_at_least(1), default=None, help="runs with seeds 0..K-1 on all cores")
+    add_first_seed(p)
     p.add_argument("--dod", type=float_in(0.0, 1.0), default=None, help="Degree of Dedication in [0, 1] (Eq 3.27)")
     p.add_argument("--xi", type=float_in(0.0, 1e6), default=None, help="motivation factor xi >= 0 (Eq 3.20)")
     p.add_argument("--no-pseudo", action="store_true", help="switch off pseudo updates (Eq 3.23)")
     add_common_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+
+
+def add_first_seed(p: argparse.ArgumentParser) -> None:
+    # seeds used to choose (a calibration) can then be kept apart from seeds used to confirm
+    p.add_argument("--first-seed", type=int_at_least(0), default=0, metavar="N",
+                   help="with --seeds K: seeds N..N+K-1 instead of 0..K-1 (default 0)")
+
+
+def seed_range(first: int, k: int) -> list[int]:
+    return list(range(first, first + k))
 
 
 def add_common_arguments(p: argparse.ArgumentParser) -> None:
@@ -78,6 +89,7 @@ def build_parser() -> argparse.ArgumentParser:
     sw = sub.add_parser("sweep", help="sweep xi (Fig 4.3), DoD (Fig 4.5) or the pseudo update (Fig 4.4)")
     sw.add_argument("param", choices=("xi", "dod", "pseudo"), help="the parameter to sweep")
     sw.add_argument("--seeds", type=int_at_least(1), default=10, help="seeds 0..K-1 per point (default 10)")
+    add_first_seed(sw)
     sw.add_argument("--iterations", type=int_at_least(1), default=5000, help="iterations per run (default 5000)")
     sw.add_argument("--out", metavar="DIR", help="also write sweep-PARAM.json and the figure into DIR")
     add_common_arguments(sw)
@@ -85,6 +97,7 @@ def build_parser() -> argparse.ArgumentParser:
     rp = sub.add_parser("report", help="every table and figure of Section 4.2, baselines and adaptive DoD")
     rp.add_argument("--out", metavar="DIR", required=True, help="directory for the PNGs, report.md and results.json")
     rp.add_argument("--seeds", type=int_at_least(2), default=10, help="seeds 0..K-1 per configuration (default 10)")
+    add_first_seed(rp)
     rp.add_argument("--iterations", type=int_at_least(10), default=5000, help="iterations per run (default 5000)")
     add_common_arguments(rp)
     b = sub.add_parser("bench", help="iterations per second (one core) and the 20-seed wall time")
@@ -97,7 +110,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def config_from_args(args) -> tuple[RunConfig, list[int]]:
-    seeds = list(range(args.seeds)) if args.seeds else [args.seed or 0]
+    first = getattr(args, "first_seed", 0)
+    if first and args.seed is not None:
+        raise UserError("--first-seed goes with --seeds K (seeds N..N+K-1); for one run use --seed alone")
+    seeds = seed_range(first, args.seeds) if args.seeds else [args.seed if args.seed is not None else first]
     cfg = RunConfig(
         iterations=args.iterations, seed=seeds[0], dod=args.dod, xi=args.xi,
         pseudo_update=False if args.no_pseudo else None, scenario=args.scenario, overrides=tuple(args.set),
@@ -226,7 +242,7 @@ def cmd_sweep(args) -> int:
     base = RunConfig(iterations=args.iterations, scenario=args.scenario, overrides=tuple(args.set))
     sc = build_scenario(base)  # validates the scenario before any worker starts
     out_dir = _out_dir(args.out) if args.out else None
-    seeds = list(range(args.seeds))
+    seeds = seed_range(args.first_seed, args.seeds)
     out, raw = sweep(args.param, base, seeds, args.workers, quiet=args.quiet,
                      curves=out_dir is not None and args.param == "pseudo")
     if out_dir is not None:
@@ -247,6 +263,7 @@ def cmd_sweep(args) -> int:
         print(json.dumps(json_safe(out)))
     else:
         print(f"sweep {args.param}: {args.iterations} iterations x {args.seeds} seeds per point"
+              + (f" (seeds {seeds[0]}..{seeds[-1]})" if args.first_seed else "")
               + ("  (mean [95% interval])" if args.seeds > 1 else ""))
         print(format_sweep(out, args.seeds, sc.drive_names[sc.serving]))
     return 0
@@ -259,12 +276,13 @@ def cmd_report(args) -> int:
     build_scenario(base)
     out_dir = _out_dir(args.out)
     data = build_report(out_dir, seeds=args.seeds, iterations=args.iterations, workers=args.workers, quiet=args.quiet,
-                        scenario=args.scenario, overrides=tuple(args.set))
+                        scenario=args.scenario, overrides=tuple(args.set), first_seed=args.first_seed)
     fails = [c["check"] for c in data["checks"] if not c["ok"]]
     print(f"report written to {out_dir / 'report.md'} in {data['timing']['total_s']:.1f} s "
           f"({data['timing']['jobs']} runs on {data['timing']['workers']} workers)")
     print(f"trend checks: {len(data['checks']) - len(fails)}/{len(data['checks'])} reproduced"
           + (f"; not reproduced: {'; '.join(fails)}" if fails else ""))
+    print(f"fidelity: {data['fidelity']['summary']}")
     return 0
 
 

@@ -89,6 +89,10 @@ def _compile(sc: Scenario) -> None:
     with_intention, with_presence, reasonable = [], [], []
     loc_k, pres_k, int_k = 0, 1, 2
     on_leave = sc.open["on_leave_effects"]  # objects left behind take their on_leave values
+    # Eq 3.17 sums over all of A; Table 3.3's constraints exclude actions (default) or, read as
+    # "has no effect", leave them selectable but idle (open choices invalid_actions, always_valid_actions)
+    all_of_a = sc.open["invalid_actions"] == "no_effect"
+    unconstrained = frozenset(sc.open["always_valid_actions"])
     for code, (view, idx) in enumerate(zip(views, codes_vals)):
         s = [0.0] * len(motivs)
         present = []
@@ -99,14 +103,15 @@ def _compile(sc: Scenario) -> None:
                     s[motivs.index(m)] += float(v)
         stim.append(tuple(s))
         stim_names.append(tuple(present))
-        ok = tuple(i for i, a in enumerate(sc.actions) if _holds(a.requires, view))
+        allowed = tuple(a.name in unconstrained or _holds(a.requires, view) for a in sc.actions)
+        ok = tuple(range(len(sc.actions))) if all_of_a else tuple(i for i, a in enumerate(sc.actions) if allowed[i])
         valid.append(ok)
         valid_local.append(tuple(tuple(act_local[a] for a in ok if act_obj[a] == k) for k in range(len(obj_names))))
         nxt, dd = [], []
-        for a in sc.actions:
+        for ai, a in enumerate(sc.actions):
             new = list(idx)
             delta = [0.0] * len(dnames)
-            for e in a.effects:
+            for e in (a.effects if allowed[ai] or not all_of_a else ()):  # an idle invalid action: no effect
                 if not _holds(e.get("when", {}), view):
                     continue
                 for var, val in e.get("set", {}).items():

@@ -18,6 +18,7 @@ from .reference import parse_reference
 from .rule_policy import parse_rule_policy
 
 ANY_ACTION = "<action>"  # in OPEN_CHOICES: any action name of the scenario is allowed too
+ANY_ACTION_LIST = "<actions>"  # in OPEN_CHOICES: a list of distinct action names of the scenario
 
 # Choices the thesis leaves open, with their defaults and allowed values (a pair of floats =
 # any number in that range; ANY_ACTION = also any action name of the scenario). docs/FIDELITY.md explains each.
@@ -40,6 +41,12 @@ OPEN_CHOICES: dict[str, tuple[Any, Any]] = {
     "human_proposal_choice": ("first", ("first", "random", ANY_ACTION)),
     "human_proposal_prob": (1.0, (0.0, 1.0)),
     "metrics_sample": ("end", ("end", "after_action")),
+    # which actions the softmax of Eq 3.17 ranges over: only those whose Table 3.3 constraint holds
+    # ("excluded"), or all of A, an action whose constraint fails then changing nothing ("no_effect")
+    "invalid_actions": ("excluded", ("excluded", "no_effect")),
+    # actions whose Table 3.3 constraint is dropped (selectable and effective everywhere): a list of
+    # action names of the scenario (checked in _check_open)
+    "always_valid_actions": ((), ANY_ACTION_LIST),
     # intention recognition (Section 2.3; docs/INTENTION.md): the recogniser and the simulated user
     "intention_threshold": (0.0, (0.0, 1.0)),  # below this posterior the recognised intention is `none`
     "intention_prior_strength": (10.0, (0.0, 1e6)),  # textbook observations each prior CPD column is worth
@@ -410,6 +417,12 @@ def _check_open(open_: dict, dnames, objects, base_vars, all_vars, anames, where
             if not isinstance(val, (int, float)) or isinstance(val, bool) or not allowed[0] <= val <= allowed[1]:
                 raise ScenarioError(f"{where}: open.{key} = {val!r} must be a number in [{allowed[0]}, {allowed[1]}]")
             val = float(val)
+        elif allowed == ANY_ACTION_LIST:
+            if not isinstance(val, (list, tuple)) or not all(isinstance(x, str) and x in anames for x in val) \
+                    or len(set(val)) != len(val):
+                raise ScenarioError(f"{where}: open.{key} = {val!r} must be a list of distinct action names "
+                                    f"({', '.join(sorted(anames))})")
+            val = list(val)
         elif ANY_ACTION in allowed:
             named = [x for x in allowed if x != ANY_ACTION]
             if not isinstance(val, str) or (val not in named and val not in anames):

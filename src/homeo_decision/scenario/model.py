@@ -118,6 +118,7 @@ class ReferenceSpec:
     source: str
     metrics: dict
     statements: dict | None
+    criteria: tuple | None = None  # of dicts: a statement of the text and its testable criterion (reference.py)
 
 
 @dataclass

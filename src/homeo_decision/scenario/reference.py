@@ -10,8 +10,19 @@
         "rsr_below_half_from_dod": 0.5,     # RSR < 0.5 from about this DoD on (within 0.1)
         "best_dod": 0.2,                    # HSR x RSR is best near this DoD (within 0.1)
         "pseudo_unaffected_drive": "<drive>"  # CDA of this drive does not move with the pseudo update
-      }
+      },
+      "criteria": [                         # each statement of the text and how we test it
+        {"id": "...", "figure": "4.3", "says": "the text", "criterion": "the test in words",
+         "kind": "below", "at": "xi=0.0", "metric": "RSR", "value": 0.4}, ...
+      ]
     }
+
+Criterion kinds (labels: ``base`` or ``<sweep>=<value>``; metrics: ``HSR``, ``RSR``, ``CDA.<drive>``,
+``CEDA.all``, ...): ``below`` (at, metric, value), ``near`` (at, metric, value, tol),
+``change_between`` (from, to, metric, lo, hi: lo < to - from < hi), ``decreases`` (from, to,
+metrics), ``same`` (a, b, metric: the 95% intervals overlap), ``first_below`` (sweep, metric, level,
+value, tol), ``linear`` (sweep, metric, points: [lo, mid, hi], tol), ``best_near`` (sweep, product:
+[metrics], value, tol). ``homeo_sim.report.fidelity`` evaluates them.
 
 Everything but ``source`` is optional; a scenario without the block gets no comparison.
 """
@@ -33,8 +44,9 @@ def _number(v: Any) -> bool:
 
 def parse_reference(block: Any, drive_names: Sequence[str], where: str) -> ReferenceSpec:
     ctx = f"{where}: reference"
-    if not isinstance(block, dict) or set(block) - {"source", "metrics", "statements", "description"}:
-        raise ScenarioError(f"{ctx} must be an object with 'source' and optional 'metrics', 'statements', 'description'")
+    if not isinstance(block, dict) or set(block) - {"source", "metrics", "statements", "criteria", "description"}:
+        raise ScenarioError(f"{ctx} must be an object with 'source' and optional 'metrics', 'statements', 'criteria', "
+                            "'description'")
     if not isinstance(block.get("source"), str) or not block["source"]:
         raise ScenarioError(f"{ctx}.source must name where the numbers come from")
     metrics = block.get("metrics", {})
@@ -67,4 +79,78 @@ def parse_reference(block: Any, drive_names: Sequence[str], where: str) -> Refer
             if statements[k] not in drive_names:
                 raise ScenarioError(f"{ctx}.statements.{k}: unknown drive {statements[k]!r}; known: {', '.join(drive_names)}")
         statements = dict(statements)
-    return ReferenceSpec(block["source"], dict(metrics), statements)
+    criteria = block.get("criteria")
+    if criteria is not None:
+        if not isinstance(criteria, list):
+            raise ScenarioError(f"{ctx}.criteria must be a list of criteria")
+        ids = [c.get("id") if isinstance(c, dict) else None for c in criteria]
+        if len(set(ids)) != len(ids):
+            raise ScenarioError(f"{ctx}.criteria: ids must be distinct")
+        criteria = tuple(_criterion(c, drive_names, f"{ctx}.criteria[{i}]") for i, c in enumerate(criteria))
+    return ReferenceSpec(block["source"], dict(metrics), statements, criteria)
+
+
+# the fields of each criterion kind besides id, figure, says, criterion, kind (see the module docstring)
+CRITERION_FIELDS = {
+    "below": ("at", "metric", "value"),
+    "near": ("at", "metric", "value", "tol"),
+    "change_between": ("from", "to", "metric", "lo", "hi"),
+    "decreases": ("from", "to", "metrics"),
+    "same": ("a", "b", "metric"),
+    "first_below": ("sweep", "metric", "level", "value", "tol"),
+    "linear": ("sweep", "metric", "points", "tol"),
+    "best_near": ("sweep", "product", "value", "tol"),
+}
+_SWEEPS = ("xi", "dod", "pseudo")
+_LABEL_FIELDS, _METRIC_FIELDS = ("at", "from", "to", "a", "b"), ("metric",)
+
+
+def _metric_ok(m: Any, drive_names: Sequence[str]) -> bool:
+    if m in ("HSR", "RSR"):
+        return True
+    if not isinstance(m, str) or m.count(".") != 1:
+        return False
+    k, dn = m.split(".")
+    return k in ("CDA", "CEDA") and (dn == "all" or dn in drive_names)
+
+
+def _label_ok(lab: Any) -> bool:
+    if lab == "base":
+        return True
+    if not isinstance(lab, str) or "=" not in lab:
+        return False
+    sw, v = lab.split("=", 1)
+    return sw in _SWEEPS
+
+
+def _criterion(c: Any, drive_names: Sequence[str], ctx: str) -> dict:
+    if not isinstance(c, dict):
+        raise ScenarioError(f"{ctx} must be an object")
+    kind = c.get("kind")
+    if kind not in CRITERION_FIELDS:
+        raise ScenarioError(f"{ctx}.kind = {kind!r} must be one of {sorted(CRITERION_FIELDS)}")
+    need = ("id", "figure", "says", "criterion", "kind") + CRITERION_FIELDS[kind]
+    if set(c) != set(need):
+        raise ScenarioError(f"{ctx}: a {kind!r} criterion has exactly the fields {list(need)}")
+    for k in ("id", "figure", "says", "criterion"):
+        if not isinstance(c[k], str) or not c[k]:
+            raise ScenarioError(f"{ctx}.{k} must be a non-empty text")
+    for k in _LABEL_FIELDS:
+        if k in c and not _label_ok(c[k]):
+            raise ScenarioError(f"{ctx}.{k} = {c[k]!r} must be 'base' or '<sweep>=<value>' with sweep in {list(_SWEEPS)}")
+    metrics = [c[k] for k in _METRIC_FIELDS if k in c] + list(c.get("metrics", [])) + list(c.get("product", []))
+    for m in metrics:
+        if not _metric_ok(m, drive_names):
+            raise ScenarioError(f"{ctx}: metric {m!r} must be HSR, RSR or CDA/CEDA.<drive or all> "
+                                f"(drives: {', '.join(drive_names)})")
+    if "sweep" in c and c["sweep"] not in _SWEEPS:
+        raise ScenarioError(f"{ctx}.sweep = {c['sweep']!r} must be one of {list(_SWEEPS)}")
+    for k in ("value", "tol", "level", "lo", "hi"):
+        if k in c and not _number(c[k]):
+            raise ScenarioError(f"{ctx}.{k} = {c[k]!r} must be a number")
+    if "points" in c and (not isinstance(c["points"], list) or len(c["points"]) != 3 or not all(map(_number, c["points"]))):
+        raise ScenarioError(f"{ctx}.points must be three numbers [low, middle, high]")
+    for k in ("metrics", "product"):
+        if k in c and (not isinstance(c[k], list) or not c[k]):
+            raise ScenarioError(f"{ctx}.{k} must be a non-empty list of metrics")
+    return dict(c)

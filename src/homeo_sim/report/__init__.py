@@ -23,7 +23,7 @@ from .markdown import _markdown
 __all__ = ["baselines_for", "build_report", "fig_dod", "fig_pseudo", "fig_xi", "report_configs"]
 
 def build_report(out_dir: str | Path, seeds: int = 10, iterations: int = 5000, workers: int | None = None,
-                 quiet: bool = False, scenario: str | None = None, overrides: tuple = ()) -> dict:
+                 quiet: bool = False, scenario: str | None = None, overrides: tuple = (), first_seed: int = 0) -> dict:
     """Run everything, write the figures, ``report.md`` and ``results.json`` into ``out_dir``."""
     t0 = time.perf_counter()
     out = Path(out_dir)
@@ -32,7 +32,7 @@ def build_report(out_dir: str | Path, seeds: int = 10, iterations: int = 5000, w
     sc = cached_scenario(base0)
     base = explicit(base0, sc)
     cfgs = report_configs(base, baselines_for(sc))
-    seed_list = list(range(seeds))
+    seed_list = list(range(first_seed, first_seed + seeds))
     labels = list(cfgs)
     nw = max(1, min(workers or os.cpu_count() or 1, n_jobs(list(cfgs.values()), seed_list)))
     with progress_bar(n_jobs(list(cfgs.values()), seed_list), quiet, "report") as bar:
@@ -42,6 +42,7 @@ def build_report(out_dir: str | Path, seeds: int = 10, iterations: int = 5000, w
     names = sc.drive_names
     M = {k: summarize_point(v, names) for k, v in R.items()}
     data = _analyse(sc, base, R, M, seeds)
+    data["first_seed"] = first_seed
     _figures(out, sc, R, M, data)
     t_total = time.perf_counter() - t0
     data["timing"] = {"runs_s": t_runs, "total_s": t_total, "workers": nw, "cpu_count": os.cpu_count(),

@@ -18,6 +18,7 @@ from homeo_decision.adaptive_dod import AdaptiveDoDSettings
 
 from ..runner import RunConfig
 from ..stats import describe
+from .fidelity import fidelity
 from ..sweep import LEARN_HSR, LEARN_RSR, LEARNING_WINDOW, SWEEPS, JobResult, median_time, point_config
 
 BASELINES = ("random", "rule", "flatq", "nofeedback")  # "rule" only when the scenario has a rule_policy block
@@ -128,55 +129,11 @@ def _analyse(sc, base: RunConfig, R: dict, M: dict, seeds: int) -> dict:
                                              for a, b in zip(ad, R[key_of[best_v]])])
     d["adaptive"]["fixed"] = {str(v): s for v, s in dod_pts}
     d["checks"] = _checks(sc, M, pols, early, mean, base.iterations)
-    # what the scenario's reference says about the sweeps, against ours (none without a reference)
-    st = sc.reference.statements if sc.reference is not None else None
-    d["statements"] = _statements(M, mean, dod_pts, st) if st else []
+    # the fidelity score: Table 4.5 against our intervals, and the text's statements about the sweeps
+    # against their criteria (both from the scenario's reference block; none without one)
+    d["fidelity"] = fidelity(sc.reference, M, SWEEPS, {"dod": base.dod})
+    d["statements"] = d["fidelity"]["statements"]
     return d
-
-
-def _overlap(a: dict, b: dict) -> bool:
-    return a["ci95"][0] <= b["ci95"][1] and b["ci95"][0] <= a["ci95"][1]
-
-
-def _statements(M, mean, dod_pts, st: dict) -> list[dict]:
-    """What the reference (the thesis's prose) says about Figs 4.3-4.5, set against our numbers (beyond the
-    checks); ``st`` is the ``statements`` part of the scenario's reference block."""
-    out = []
-
-    def add(fig, says, ours, agrees):
-        out.append({"figure": fig, "thesis": says, "ours": ours, "agrees": agrees})
-
-    x0, xb = mean("xi=0.0", "RSR"), st["rsr_at_xi0_below"]
-    add("4.3", f"xi = 0: insecure more than {round(100 * (1 - xb)):g}% of the time (RSR < {xb:g})", f"RSR(xi 0) = {x0:.3f}",
-        x0 < xb)
-    dh = mean("xi=2.0", "HSR") - mean("xi=0.0", "HSR")
-    add("4.3", "a higher xi lowers HSR slightly", f"HSR(xi 2) - HSR(xi 0) = {dh:+.3f}", -0.1 < dh < 0)
-    dc = mean("xi=2.0", "CEDA", "all") - mean("xi=0.0", "CEDA", "all")
-    add("4.3", "CDA and CEDA improve with xi", f"CEDA all: {mean('xi=0.0', 'CEDA', 'all'):.2f} (xi 0) -> "
-        f"{mean('xi=2.0', 'CEDA', 'all'):.2f} (xi 2); CDA all: {mean('xi=0.0', 'CDA', 'all'):.1f} -> "
-        f"{mean('xi=2.0', 'CDA', 'all'):.1f}", dc < 0 and mean("xi=2.0", "CDA", "all") < mean("xi=0.0", "CDA", "all"))
-    on, off = M["pseudo=True"], M["pseudo=False"]
-    for k, path in (("RSR", ("RSR",)), ("CDA (all)", ("CDA", "all"))):
-        a, b = _get(on, *path), _get(off, *path)
-        add("4.4", f"{k} roughly the same with or without pseudo update",
-            f"on {a['mean']:.3f}, off {b['mean']:.3f}", _overlap(a, b))
-    dn = st["pseudo_unaffected_drive"]  # the drive the reference names as unaffected
-    a, b = on["CDA"][dn], off["CDA"][dn]
-    add("4.4", f"{dn}: no significant difference", f"CDA {dn} on {a['mean']:.1f}, off {b['mean']:.1f}", _overlap(a, b))
-    h0, hr = mean("dod=0.0", "HSR"), st["hsr_at_dod0"]
-    add("4.5", f"HSR still about {hr} at DoD 0", f"HSR(DoD 0) = {h0:.3f}", abs(h0 - hr) <= 0.1)
-    below = [v for v in SWEEPS["dod"] if mean(f"dod={v}", "RSR") < 0.5]
-    bd = st["rsr_below_half_from_dod"]
-    add("4.5", f"DoD above {bd:g}: insecure more than half of the time (RSR < 0.5)",
-        f"RSR < 0.5 from DoD {below[0]:g} on" if below else "RSR never below 0.5",
-        bool(below) and abs(below[0] - bd) <= 0.1 + 1e-9)
-    r0, r5, r1 = mean("dod=0.0", "RSR"), mean("dod=0.5", "RSR"), mean("dod=1.0", "RSR")
-    add("4.5", "RSR falls almost linearly with DoD", f"RSR(0.5) = {r5:.3f}; a straight line from RSR(0) = {r0:.3f} to "
-        f"RSR(1) = {r1:.3f} gives {(r0 + r1) / 2:.3f}", abs(r5 - (r0 + r1) / 2) <= 0.1)
-    best_v = max(dod_pts, key=lambda p: p[1]["mean"])[0]
-    add("4.5", f"a DoD around {st['best_dod']:g} balances HSR and RSR best", f"HSR x RSR is highest at DoD {best_v:g}",
-        abs(best_v - st["best_dod"]) <= 0.1 + 1e-9)
-    return out
 
 
 def _get(m: dict, *path):

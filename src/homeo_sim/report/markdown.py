@@ -18,7 +18,8 @@ def _markdown(sc, base: RunConfig, M: dict, d: dict, seeds: int) -> str:
     L = []
     w = L.append
     w("# Section 4.2 of the thesis, re-run\n")
-    w(f"{seeds} seeds (0..{seeds - 1}) x {base.iterations} iterations per configuration; scenario `{sc.name}` "
+    first = d.get("first_seed", 0)
+    w(f"{seeds} seeds ({first}..{first + seeds - 1}) x {base.iterations} iterations per configuration; scenario `{sc.name}` "
       f"(Q-layout fingerprint `{sc.fingerprint()}`), defaults DoD {base.dod}, xi {base.xi}, pseudo update "
       f"{'on' if base.pseudo_update else 'off'}. Every number below comes from this run; intervals are Student-t 95% "
       "intervals over seeds. "
@@ -42,11 +43,24 @@ def _markdown(sc, base: RunConfig, M: dict, d: dict, seeds: int) -> str:
             w(f"- **{c['check']}**: {c['why']}")
     w("")
 
-    if says:
+    fid = d["fidelity"]
+    if ref is not None:
+        w("## Fidelity score\n")
+        w(f"**{fid['summary']}.** A published number is *inside* when it lies in our 95% interval; its distance is "
+          f"|ours - published| in half-widths of that interval, the half-width taken as at least "
+          f"{100 * fid['half_width_floor']:g}% of the published value. Each statement of the text about the sweeps "
+          "has a criterion written from the text (the scenario's `reference.criteria`).\n")
+        w("| metric | ours: mean [95% interval] | thesis | inside | distance (half-widths) |\n|---|---|---|---|---|")
+        for r in fid["table"]:
+            dg = 3 if r["metric"] in ("HSR", "RSR") else 2
+            w(f"| {r['metric'].replace('.', ' ')} | {r['mean']:.{dg}f} [{r['ci95'][0]:.{dg}f}, {r['ci95'][1]:.{dg}f}] | "
+              f"{r['thesis']:g} | {'yes' if r['inside'] else 'no'} | {r['distance']:.2f} |")
+        w("")
+    if d["statements"]:
         w("## What the thesis says about its figures, against ours\n")
-        w("| figure | the thesis says | ours | agrees |\n|---|---|---|---|")
+        w("| figure | the thesis says | criterion | ours | holds |\n|---|---|---|---|---|")
         for st in d["statements"]:
-            w(f"| {st['figure']} | {st['thesis']} | {st['ours']} | {'yes' if st['agrees'] else '**no**'} |")
+            w(f"| {st['figure']} | {st['thesis']} | {st['criterion']} | {st['ours']} | {'yes' if st['agrees'] else '**no**'} |")
         w("")
     m = d["table_4_5"]
     w("## Table 4.5: metrics after the run\n")

@@ -1,0 +1,174 @@
+"""The fidelity score (issue 15): Table 4.5 inside/distance and the statements' criteria, on hand-made
+aggregates whose answers are computed here by hand; the criteria's validation; the new open choices."""
+
+from __future__ import annotations
+
+import copy
+
+import pytest
+
+from homeo_decision.scenario import ScenarioError, load_scenario, scenario_from_dict
+from homeo_decision.scenario.model import ReferenceSpec
+from homeo_sim.report.fidelity import criteria_score, fidelity, needed_labels, table_score
+
+
+def s(mean, lo, hi, per_seed=None):
+    return {"mean": mean, "ci95": [lo, hi], "per_seed": per_seed or [mean]}
+
+
+def agg(hsr, rsr, cda_all=s(30.0, 28.0, 32.0), ceda_all=s(4.0, 3.0, 5.0)):
+    return {"HSR": hsr, "RSR": rsr, "CDA": {"D": s(40.0, 39.9, 40.1), "all": cda_all},
+            "CEDA": {"D": s(2.0, 1.0, 3.0), "all": ceda_all}}
+
+
+REF = {"HSR": 0.82, "RSR": 0.90, "CDA": {"D": 43.5, "all": 32.5}, "CEDA": {"D": 2.05, "all": 4.12}}
+
+
+def test_table_score_inside_and_distance_by_hand():
+    a = agg(s(0.80, 0.79, 0.81), s(0.88, 0.85, 0.91))
+    rows = {r["metric"]: r for r in table_score(a, REF)}
+    assert list(rows) == ["HSR", "RSR", "CDA.D", "CDA.all", "CEDA.D", "CEDA.all"]
+    # HSR: half-width 0.01 < 5% of 0.82 = 0.041, so the floor applies: 0.02 / 0.041
+    assert not rows["HSR"]["inside"] and rows["HSR"]["distance"] == pytest.approx(0.02 / 0.041)
+    # RSR: inside; half-width 0.03 < 5% of 0.90 = 0.045, the floor: 0.02 / 0.045
+    assert rows["RSR"]["inside"] and rows["RSR"]["distance"] == pytest.approx(0.02 / 0.045)
+    # CDA D: 40 [39.9, 40.1] vs 43.5: floor 2.175, distance 3.5 / 2.175
+    assert not rows["CDA.D"]["inside"] and rows["CDA.D"]["distance"] == pytest.approx(3.5 / 2.175)
+    # CDA all: 30 [28, 32] vs 32.5: half-width 2 > floor 1.625, outside by a hair, distance 1.25
+    assert not rows["CDA.all"]["inside"] and rows["CDA.all"]["distance"] == pytest.approx(1.25)
+    # CEDA D: 2 [1, 3] vs 2.05 inside; CEDA all 4 [3, 5] vs 4.12 inside, distance 0.12
+    assert rows["CEDA.D"]["inside"] and rows["CEDA.all"]["inside"]
+    assert rows["CEDA.all"]["distance"] == pytest.approx(0.12)
+
+
+def C(kind, **kw):
+    return {"id": kind + str(len(kw)), "figure": "x", "says": "text", "criterion": "words", "kind": kind, **kw}
+
+
+def M_fake():
+    """Labelled aggregates: xi 0 and 2, pseudo on/off, a DoD sweep 0, 0.5, 1 and the default run at 0.25."""
+    def a(h, r, cda=30.0, ceda=4.0, hs=None, rs=None):
+        return agg(s(h, h - 0.01, h + 0.01, hs), s(r, r - 0.02, r + 0.02, rs), s(cda, cda - 1, cda + 1), s(ceda, ceda - .5, ceda + .5))
+    return {
+        "base": a(0.8, 0.9, hs=[0.8, 0.8], rs=[0.9, 0.9]),
+        "pseudo=True": a(0.8, 0.9),
+        "pseudo=False": a(0.7, 0.85, cda=31.5),
+        "xi=0.0": a(0.85, 0.35, cda=40.0, ceda=9.0),
+        "xi=2.0": a(0.83, 0.95, cda=25.0, ceda=2.0),
+        "dod=0.0": a(0.62, 0.95, hs=[0.62, 0.62], rs=[0.95, 0.95]),
+        "dod=0.5": a(0.9, 0.45, hs=[0.9, 0.9], rs=[0.45, 0.45]),
+        "dod=1.0": a(0.95, 0.05, hs=[0.95, 0.95], rs=[0.05, 0.05]),
+    }
+
+
+SWEEPS = {"dod": (0.0, 0.5, 1.0), "xi": (0.0, 2.0), "pseudo": (True, False)}
+
+
+@pytest.mark.parametrize("crit, holds", [
+    (C("below", at="xi=0.0", metric="RSR", value=0.4), True),           # 0.35 < 0.4
+    (C("below", at="xi=0.0", metric="RSR", value=0.3), False),
+    (C("change_between", **{"from": "xi=0.0", "to": "xi=2.0"}, metric="HSR", lo=-0.1, hi=0.0), True),  # -0.02
+    (C("change_between", **{"from": "xi=0.0", "to": "xi=2.0"}, metric="HSR", lo=-0.01, hi=0.0), False),
+    (C("decreases", **{"from": "xi=0.0", "to": "xi=2.0"}, metrics=["CEDA.all", "CDA.all"]), True),
+    (C("decreases", **{"from": "xi=2.0", "to": "xi=0.0"}, metrics=["CEDA.all"]), False),
+    (C("same", a="pseudo=True", b="pseudo=False", metric="CDA.all"), True),   # [29, 31] and [30.5, 32.5]
+    (C("same", a="pseudo=True", b="pseudo=False", metric="HSR"), False),      # [0.79, 0.81] and [0.69, 0.71]
+    (C("near", at="dod=0.0", metric="HSR", value=0.6, tol=0.1), True),
+    (C("near", at="dod=0.0", metric="HSR", value=0.8, tol=0.1), False),
+    (C("first_below", sweep="dod", metric="RSR", level=0.5, value=0.5, tol=0.1), True),  # first below at 0.5
+    (C("first_below", sweep="dod", metric="RSR", level=0.5, value=0.2, tol=0.1), False),
+    (C("linear", sweep="dod", metric="RSR", points=[0.0, 0.5, 1.0], tol=0.1), True),  # 0.45 vs (0.95+0.05)/2
+    (C("linear", sweep="dod", metric="RSR", points=[0.0, 0.5, 1.0], tol=0.04), False),
+    # HSR x RSR: 0.589 (0), 0.72 (base, 0.25), 0.405 (0.5), 0.0475 (1): best at the default's 0.25
+    (C("best_near", sweep="dod", product=["HSR", "RSR"], value=0.2, tol=0.1), True),
+    (C("best_near", sweep="dod", product=["HSR", "RSR"], value=0.5, tol=0.1), False),
+])
+def test_each_criterion_kind_by_hand(crit, holds):
+    (row,) = criteria_score([crit], M_fake(), SWEEPS, {"dod": 0.25})
+    assert row["agrees"] is holds, row["ours"]
+
+
+def test_needed_labels_are_those_the_criteria_read():
+    crits = [C("below", at="xi=0.0", metric="RSR", value=0.4),
+             C("linear", sweep="dod", metric="RSR", points=[0.0, 0.5, 1.0], tol=0.1),
+             C("best_near", sweep="dod", product=["HSR", "RSR"], value=0.2, tol=0.1)]
+    assert needed_labels(crits, SWEEPS) == {"base", "xi=0.0", "dod=0.0", "dod=0.5", "dod=1.0"}
+
+
+def test_summary_counts_inside_and_met():
+    ref = ReferenceSpec("src", REF, None, (C("below", at="xi=0.0", metric="RSR", value=0.4),
+                                            C("below", at="xi=0.0", metric="RSR", value=0.3)))
+    M = M_fake()
+    M["base"] = agg(s(0.80, 0.79, 0.81), s(0.88, 0.85, 0.91))
+    f = fidelity(ref, M, SWEEPS, {"dod": 0.25})
+    assert (f["table_inside"], f["table_total"], f["statements_met"], f["statements_total"]) == (3, 6, 1, 2)
+    assert f["summary"] == "Table 4.5: 3/6 inside CI; statements: 1/2"
+    assert fidelity(None, M, SWEEPS)["table"] == []
+
+
+# -- the thesis scenario's criteria ---------------------------------------------------------
+
+def test_thesis_has_ten_criteria_one_per_statement_the_report_checks():
+    crit = load_scenario().reference.criteria
+    assert len(crit) == 10 and len({c["id"] for c in crit}) == 10
+    assert {c["figure"] for c in crit} == {"4.3", "4.4", "4.5"}
+
+
+@pytest.mark.parametrize("change, words", [
+    (lambda c: c.update(kind="around"), ("kind", "around")),
+    (lambda c: c.update(metric="CDA.Power"), ("metric", "CDA.Power")),
+    (lambda c: c.pop("value"), ("exactly the fields",)),
+    (lambda c: c.update(at="speed=3"), ("at", "speed=3")),
+    (lambda c: c.update(value="low"), ("value", "number")),
+])
+def test_a_bad_criterion_is_one_line_error(thesis_raw, change, words):
+    raw = copy.deepcopy(thesis_raw)
+    change(raw["reference"]["criteria"][0])
+    with pytest.raises(ScenarioError) as e:
+        scenario_from_dict(raw)
+    assert "\n" not in str(e.value) and "criteria[0]" in str(e.value)
+    for w in words:
+        assert w in str(e.value)
+
+
+# -- the open choices of issue 15 --------------------------------------------------------------
+
+def _valid(sc, code):
+    return {sc.action_names[a] for a in sc.c.valid[code]}
+
+
+def test_defaults_keep_the_constraints(thesis, enc):
+    assert thesis.open["invalid_actions"] == "excluded" and thesis.open["always_valid_actions"] == []
+    assert "Rest" not in _valid(thesis, enc(thesis, "H"))
+
+
+def test_always_valid_actions_drop_a_constraint_and_keep_the_effect(enc):
+    sc = load_scenario(overrides={"always_valid_actions": ["Rest"]})
+    code = enc(sc, "H")  # human near: Rest is forbidden by Table 3.3
+    assert "Rest" in _valid(sc, code) and "Chat" in _valid(sc, code)
+    assert sc.c.drive_delta[code][sc.action_index("Rest")][2] == -20.0
+    assert "Attach" not in _valid(sc, code)
+
+
+def test_no_effect_makes_every_action_selectable_and_an_invalid_one_idle(enc):
+    sc = load_scenario(overrides={"invalid_actions": "no_effect"})
+    code = enc(sc, "R")  # charger far, human far: Attach and Chat are invalid there
+    assert _valid(sc, code) == set(sc.action_names)
+    for a in ("Attach", "Chat"):
+        i = sc.action_index(a)
+        assert sc.c.next_code[code][i] == code and set(sc.c.drive_delta[code][i]) == {0.0}
+    assert sc.c.drive_delta[code][sc.action_index("Rest")][2] == -20.0  # a valid one still acts
+
+
+@pytest.mark.parametrize("override, words", [
+    ({"invalid_actions": "ignored"}, ("invalid_actions", "excluded", "no_effect")),
+    ({"always_valid_actions": ["Nap"]}, ("always_valid_actions", "action names")),
+    ({"always_valid_actions": "Rest"}, ("always_valid_actions", "list")),
+    ({"always_valid_actions": ["Rest", "Rest"]}, ("always_valid_actions", "distinct")),
+])
+def test_bad_new_open_choice_is_one_line_error(override, words):
+    with pytest.raises(ScenarioError) as e:
+        load_scenario(overrides=override)
+    assert "\n" not in str(e.value)
+    for w in words:
+        assert w in str(e.value)

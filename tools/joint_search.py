@@ -1,0 +1,296 @@
+"""Joint search over the thesis's open choices (issue 15): Optuna's TPE on search seeds, the best
+few confirmed on other seeds with the fidelity score of ``homeo-sim report``.
+
+Called by ``tools/calibrate.py --joint``. Optuna is a tool dependency only:
+
+    .venv/bin/pip install -r tools/requirements-calibrate.lock     # or: pip install -e '.[calibrate]'
+
+What one trial measures, on the search seeds (5000 iterations each): the default run, xi 0 and 2,
+no pseudo update and DoD 0, 0.1, ..., 0.6 and 1 (the runs the criteria read; DoD 0.7-0.9 only
+matter when RSR stays above 0.5 up to 0.6, and then the "RSR < 0.5 above DoD 0.5" statement fails
+anyway). The 95% intervals are rescaled to the confirmation seed count (Student t and sqrt(n)),
+so "inside" means "would be inside with that many seeds" if the spread stays as measured.
+
+Distance from the text (``text_distance``) counts the open choices set against the thesis's
+literal reading; choices the text leaves wholly free (an amount, a rate, an initial value, an
+order it does not state) cost nothing whatever their value. See docs/FIDELITY.md.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "src"))
+
+from homeo_decision.scenario import load_scenario  # noqa: E402
+from homeo_sim.report.analysis import DOD0_HSR_MIN, DOD_HSR_GAIN, DOD_RSR_DROP, PSEUDO_HSR_GAIN, XI_RSR_GAIN  # noqa: E402
+from homeo_sim.report.fidelity import fidelity  # noqa: E402
+from homeo_sim.runner import RunConfig, run_seeds  # noqa: E402
+from homeo_sim.stats import aggregate, t975  # noqa: E402
+from homeo_sim.sweep import SWEEPS, explicit, point_config  # noqa: E402
+
+SC = load_scenario()  # the thesis scenario: its reference block holds Table 4.5 and the criteria
+DRIVES = SC.drive_names
+SEARCHED = ("initial_q", "scold_drive_change", "serving_growth", "reward_span", "on_leave_effects", "tie_break",
+            "value_max_over", "metrics_sample", "human_no_intention_prob", "human_leave_prob", "human_return_prob",
+            "human_proposal_choice", "human_proposal_prob", "invalid_actions", "always_valid_actions")
+DOD_SEARCH = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 1.0)
+# the objective's weights (docs/FIDELITY.md): a statement met or a number inside counts 1
+W_TREND, W_DIST, W_TEXT = 0.25, 0.02, 0.5
+
+
+# -- distance from the text ----------------------------------------------------------------
+
+# the thesis's literal reading of each choice it speaks to (choices not listed are free)
+LITERAL = {
+    "serving_growth": ("always", "Table 4.2, Sec 4.2.1: every drive grows with every iteration"),
+    "scold_drive_change": (">0", "Sec 3.3.1: getting scolded increases NAch"),
+    "human_proposal_choice": ("random", "Table 4.3: the desired action of leave is MoveToR or MoveToC"),
+    "human_proposal_prob": (1.0, "Algorithm 2 line 17: the human always proposes on a miss"),
+    "value_max_over": ("all", "Eq 3.15-3.16: the max runs over A_o"),
+    "invalid_actions": ("excluded", "Table 3.3: the constraints say which actions can be performed"),
+    "always_valid_actions": ([], "Table 3.3: Rest and Chat have constraints"),
+}
+
+
+def text_distance(o: dict) -> int:
+    """How many open choices depart from the literal reading (each listed action of
+    ``always_valid_actions`` counts once)."""
+    d = 0
+    d += o["serving_growth"] != "always"
+    d += not o["scold_drive_change"] > 0
+    d += o["human_proposal_choice"] != "random"
+    d += o["human_proposal_prob"] < 1.0
+    d += o["value_max_over"] != "all"
+    d += o["invalid_actions"] != "excluded"
+    d += len(o["always_valid_actions"])
+    return int(d)
+
+
+# -- one evaluation ---------------------------------------------------------------------------
+
+def _configs(open_: dict, dods) -> dict[str, RunConfig]:
+    base = explicit(RunConfig(overrides=tuple(open_.items())), SC)
+    cfgs = {"base": base, "xi=0.0": point_config("xi", 0.0, base), "xi=2.0": point_config("xi", 2.0, base),
+            "pseudo=False": point_config("pseudo", False, base)}
+    for v in dods:
+        cfgs[f"dod={v}"] = point_config("dod", v, base)
+    return cfgs
+
+
+def _rescale(agg: dict, n_from: int, n_to: int) -> dict:
+    """The aggregate with every 95% half-width as it would be with ``n_to`` seeds at the same spread."""
+    f = t975(n_to - 1) / t975(n_from - 1) * math.sqrt(n_from / n_to)
+
+    def walk(x):
+        if isinstance(x, dict) and "ci95" in x:
+            m, (lo, hi) = x["mean"], x["ci95"]
+            return {**x, "ci95": [m - (m - lo) * f, m + (hi - m) * f]}
+        return {k: walk(v) for k, v in x.items()} if isinstance(x, dict) else x
+
+    return walk(agg)
+
+
+def trends(M: dict) -> dict:
+    """The six trend checks of issue 6 (homeo_sim.report.analysis), pass or fail."""
+    m = lambda lab, k: M[lab][k]["mean"]  # noqa: E731
+    serving = DRIVES[SC.serving]
+    return {
+        "HSR rises with DoD": m("dod=1.0", "HSR") - m("dod=0.0", "HSR") >= DOD_HSR_GAIN,
+        "RSR falls with DoD": m("dod=0.0", "RSR") - m("dod=1.0", "RSR") >= DOD_RSR_DROP,
+        "HSR at DoD 0 stays useful": m("dod=0.0", "HSR") >= DOD0_HSR_MIN,
+        "RSR improves with xi": m("xi=2.0", "RSR") - m("xi=0.0", "RSR") >= XI_RSR_GAIN,
+        "pseudo update raises HSR": m("base", "HSR") - m("pseudo=False", "HSR") >= PSEUDO_HSR_GAIN,
+        "pseudo update lowers the serving drive's CDA":
+            M["pseudo=False"]["CDA"][serving]["mean"] > M["base"]["CDA"][serving]["mean"],
+    }
+
+
+def evaluate(open_: dict, seeds: list[int], dods=DOD_SEARCH, scale_to: int | None = None, workers: int = 1) -> dict:
+    """Run the configurations the score needs on ``seeds``; return the fidelity score and its parts."""
+    cfgs = _configs(open_, dods)
+    M = {}
+    for lab, cfg in cfgs.items():
+        agg = aggregate([r.metrics for r in run_seeds(cfg, seeds, workers)], DRIVES)
+        M[lab] = _rescale(agg, len(seeds), scale_to) if scale_to else agg
+    M["pseudo=True"] = M["base"]  # the default run has the pseudo update on
+    base = cfgs["base"]
+    fid = fidelity(SC.reference, M, {**SWEEPS, "dod": tuple(dods)}, {"dod": base.dod})
+    tr = trends(M)
+    dist = sum(min(r["distance"], 10.0) for r in fid["table"])
+    out = {"open": open_, "inside": fid["table_inside"], "met": fid["statements_met"], "trends": sum(tr.values()),
+           "text_distance": text_distance(open_), "sum_distance": dist,
+           "inside_names": [r["metric"] for r in fid["table"] if r["inside"]],
+           "unmet": [s["id"] for s in fid["statements"] if not s["agrees"]],
+           "failed_trends": [k for k, ok in tr.items() if not ok],
+           "HSR": M["base"]["HSR"]["mean"], "RSR": M["base"]["RSR"]["mean"],
+           "base": {k: M["base"][k] for k in ("HSR", "RSR")} | {"CDA": M["base"]["CDA"], "CEDA": M["base"]["CEDA"]},
+           "fidelity": fid}
+    out["score"] = score(out)
+    return out
+
+
+def score(e: dict) -> float:
+    """The objective: numbers inside plus statements met, a little for the trends and for closeness,
+    less W_TEXT per departure from the literal text."""
+    return (e["inside"] + e["met"] + W_TREND * e["trends"] - W_DIST * e["sum_distance"]
+            - W_TEXT * e["text_distance"])
+
+
+# -- the search ------------------------------------------------------------------------------
+
+def suggest(trial, start: dict) -> dict:
+    """One point of the joint space (every searched open choice at once)."""
+    o = dict(start)
+    o["initial_q"] = trial.suggest_float("initial_q", -5.0, 20.0, step=0.5)
+    o["scold_drive_change"] = trial.suggest_float("scold_drive_change", 0.0, 10.0, step=1.0)
+    o["serving_growth"] = trial.suggest_categorical("serving_growth", ["always", "expressed", "unsatisfied"])
+    o["reward_span"] = trial.suggest_categorical("reward_span", ["iteration", "action"])
+    o["on_leave_effects"] = trial.suggest_categorical("on_leave_effects", [True, False])
+    o["tie_break"] = trial.suggest_categorical("tie_break", ["first", "last"])
+    o["value_max_over"] = trial.suggest_categorical("value_max_over", ["all", "valid"])
+    o["metrics_sample"] = trial.suggest_categorical("metrics_sample", ["end", "after_action"])
+    o["human_no_intention_prob"] = trial.suggest_float("human_no_intention_prob", 0.3, 0.8, step=0.05)
+    o["human_leave_prob"] = trial.suggest_categorical("human_leave_prob", [0.0, 0.02, 0.05, 0.1])
+    o["human_return_prob"] = trial.suggest_float("human_return_prob", 0.2, 1.0, step=0.1)
+    o["human_proposal_choice"] = trial.suggest_categorical("human_proposal_choice", ["random", "MoveToR", "MoveToC"])
+    o["human_proposal_prob"] = trial.suggest_float("human_proposal_prob", 0.5, 1.0, step=0.1)
+    o["invalid_actions"] = trial.suggest_categorical("invalid_actions", ["excluded", "no_effect"])
+    free = trial.suggest_categorical("always_valid_actions", ["none", "Rest", "Chat", "Rest+Chat"])
+    o["always_valid_actions"] = [] if free == "none" else free.split("+")
+    return o
+
+
+def _params(o: dict) -> dict:
+    """An open block as Optuna parameters (to enqueue a known point)."""
+    p = {k: o[k] for k in SEARCHED if k != "always_valid_actions"}
+    p["always_valid_actions"] = "+".join(o["always_valid_actions"]) or "none"
+    return p
+
+
+def _seeds(spec: str) -> list[int]:
+    a, _, b = spec.partition("-")
+    return list(range(int(a), int(b or a) + 1))
+
+
+def current_open() -> dict:
+    return {k: SC.open[k] for k in SEARCHED}
+
+
+def diff(o: dict, ref: dict) -> str:
+    ch = [f"{k}={json.dumps(o[k])}" for k in SEARCHED if o[k] != ref[k]]
+    return ", ".join(ch) or "(as the current default)"
+
+
+def run(trials: int, search_seeds: str, confirm_seeds: str, n_confirm: int, sampler_seed: int, out: str,
+        workers: int = 1) -> dict:
+    import optuna
+
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    s_seeds, c_seeds = _seeds(search_seeds), _seeds(confirm_seeds)
+    if set(s_seeds) & set(c_seeds):
+        raise SystemExit("calibrate.py: error: --search-seeds and --confirm-seeds overlap")
+    outp = Path(out)
+    outp.mkdir(parents=True, exist_ok=True)
+    log = (outp / "trials.jsonl").open("w")
+    start = current_open()
+    t0 = time.time()
+    study = optuna.create_study(direction="maximize",
+                                sampler=optuna.samplers.TPESampler(seed=sampler_seed, multivariate=True))
+    study.enqueue_trial(_params(start))  # the current default is trial 0
+    # and three hints from the earlier, independent search (issue 15: the initial Q value sets how long
+    # the robot explores; a less busy human and a small scolding helped)
+    for hint in ({"initial_q": 5.0}, {"initial_q": 10.0}, {"initial_q": 10.0, "human_no_intention_prob": 0.65,
+                                                           "scold_drive_change": 3.0}):
+        study.enqueue_trial(_params({**start, **hint}))
+    evals: list[dict] = []
+
+    def objective(trial):
+        o = suggest(trial, start)
+        e = evaluate(o, s_seeds, scale_to=len(c_seeds), workers=workers)
+        e.pop("fidelity")
+        e["trial"] = trial.number
+        evals.append(e)
+        log.write(json.dumps(e) + "\n")
+        log.flush()
+        print(f"trial {trial.number:4d}: score {e['score']:6.2f}  inside {e['inside']:2d}/12  met {e['met']:2d}/10  "
+              f"trends {e['trends']}/6  text {e['text_distance']}  HSR {e['HSR']:.3f} RSR {e['RSR']:.3f}  "
+              f"({time.time() - t0:.0f} s)", file=sys.stderr, flush=True)
+        return e["score"]
+
+    study.optimize(objective, n_trials=trials)
+    log.close()
+    return confirm(evals, time.time() - t0, trials, s_seeds, c_seeds, n_confirm, sampler_seed, outp, workers)
+
+
+def confirm_from(path: str, search_seeds: str, confirm_seeds: str, n_confirm: int, sampler_seed: int, out: str,
+                 workers: int = 1) -> dict:
+    """The confirmation stage alone, from a search's ``trials.jsonl`` (e.g. a search stopped early:
+    with the same sampler seed its first N trials are those of ``--trials N``)."""
+    evals = [json.loads(line) for line in Path(path).read_text().splitlines() if line.strip()]
+    outp = Path(out)
+    outp.mkdir(parents=True, exist_ok=True)
+    return confirm(evals, None, len(evals), _seeds(search_seeds), _seeds(confirm_seeds), n_confirm, sampler_seed,
+                   outp, workers)
+
+
+def confirm(evals, t_search, trials, s_seeds, c_seeds, n_confirm, sampler_seed, outp: Path, workers: int) -> dict:
+    t0 = time.time()
+    start = current_open()
+    # confirm the best few distinct points (and the current default) on seeds never searched
+    ranked, seen = [], set()
+    for e in sorted(evals, key=lambda e: -e["score"]):
+        key = json.dumps(e["open"], sort_keys=True)
+        if key not in seen:
+            seen.add(key)
+            ranked.append(e)
+    picks = ranked[:n_confirm]
+    if not any(p["open"] == start for p in picks):
+        picks.append(next(e for e in evals if e["open"] == start))
+    conf = []
+    for p in picks:
+        c = evaluate(p["open"], c_seeds, dods=SWEEPS["dod"], workers=workers)
+        c["search"] = {k: p[k] for k in ("trial", "score", "inside", "met", "trends")}
+        conf.append(c)
+        print(f"confirmed trial {p['trial']}: inside {c['inside']}/12 met {c['met']}/10 trends {c['trends']}/6 "
+              f"text {c['text_distance']}", file=sys.stderr, flush=True)
+    chosen = select(conf)
+    res = {"command": " ".join(sys.argv), "trials": trials, "search_seeds": s_seeds, "confirm_seeds": c_seeds,
+           "sampler_seed": sampler_seed, "weights": {"trend": W_TREND, "distance": W_DIST, "text": W_TEXT},
+           "search_s": t_search, "confirm_s": time.time() - t0, "confirmed": conf, "chosen": chosen["open"],
+           "current": start}
+    (outp / "joint.json").write_text(json.dumps(res, indent=1, default=str))
+    print_result(res)
+    return res
+
+
+def select(conf: list[dict]) -> dict:
+    """Fits best while staying closest to the text: among the confirmed points whose fit (numbers
+    inside + statements met) is within 1 of the best fit, the one closest to the text; then the
+    better fit, more trends, the smaller summed distance."""
+    best_fit = max(c["inside"] + c["met"] for c in conf)
+    near = [c for c in conf if c["inside"] + c["met"] >= best_fit - 1]
+    return min(near, key=lambda c: (c["text_distance"], -(c["inside"] + c["met"]), -c["trends"], c["sum_distance"]))
+
+
+def print_result(res: dict) -> None:
+    cur = res["current"]
+    took = f"{res['search_s'] / 60:.0f} min" if res["search_s"] else "time not recorded"
+    print(f"\n{res['trials']} trials x {len(res['search_seeds'])} search seeds "
+          f"({res['search_seeds'][0]}-{res['search_seeds'][-1]}), {took}; confirmation on "
+          f"seeds {res['confirm_seeds'][0]}-{res['confirm_seeds'][-1]}, {res['confirm_s'] / 60:.0f} min\n")
+    print("| trial | changes from the current default | text distance | Table 4.5 inside (search -> confirm) | "
+          "statements met (search -> confirm) | trends | HSR | RSR | summed distance |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for c in sorted(res["confirmed"], key=lambda c: (-(c["inside"] + c["met"]), c["text_distance"])):
+        s = c["search"]
+        mark = "**" if c["open"] == res["chosen"] else ""
+        print(f"| {mark}{s['trial']}{mark} | {diff(c['open'], cur)} | {c['text_distance']} | {s['inside']} -> {c['inside']} | "
+              f"{s['met']} -> {c['met']} | {c['trends']}/6 | {c['HSR']:.3f} | {c['RSR']:.3f} | {c['sum_distance']:.1f} |")
+    print("\nChosen open block (searched keys):\n```json\n" + json.dumps(res["chosen"], indent=1) + "\n```")
