@@ -83,23 +83,24 @@ class DecisionCore(Perceiving):
         self.reseed(seed)
 
     def set_params(self, *, dod=None, xi=None, gamma=None, pseudo_update=None, feedback_value=None, feedback=None) -> None:
-        """Change tunables between ticks (the node's live parameters)."""
+        """Change tunables between ticks (the node's live parameters). All are checked before any
+        changes, so a refused call leaves the core as it was."""
+        weights = dod_weights(float(dod), len(self.sc.drives), self.serving) if dod is not None else None
+        if xi is not None and not xi >= 0:
+            raise ValueError(f"xi must be >= 0, got {xi}")
+        if gamma is not None and not 0.0 <= gamma <= 1.0:
+            raise ValueError(f"gamma must be in [0, 1], got {gamma}")
+        if feedback_value is not None and not feedback_value >= 0:
+            raise ValueError(f"feedback value must be >= 0, got {feedback_value}")
         if dod is not None:
-            self.dod = float(dod)
-            self.weights = dod_weights(self.dod, len(self.sc.drives), self.serving)
+            self.dod, self.weights = float(dod), weights
         if xi is not None:
-            if xi < 0:
-                raise ValueError(f"xi must be >= 0, got {xi}")
             self.xi = float(xi)
         if gamma is not None:
-            if not 0.0 <= gamma <= 1.0:
-                raise ValueError(f"gamma must be in [0, 1], got {gamma}")
             self.gamma = float(gamma)
         if pseudo_update is not None:
             self.pseudo = bool(pseudo_update)
         if feedback_value is not None:
-            if feedback_value < 0:
-                raise ValueError(f"feedback value must be >= 0, got {feedback_value}")
             self.f = float(feedback_value)
         if feedback is not None:
             self.use_feedback = bool(feedback)

@@ -105,12 +105,17 @@ def restore_decision(core, ck: dict, where: str = "<memory>", params: bool = Fal
         missing = [k for k in DECISION_PARAMS if k not in p]
         if missing:
             raise CheckpointError(f"{where}: corrupt checkpoint (params lack {', '.join(missing)})")
-        try:
-            core.set_params(dod=float(p["dod"]), xi=float(p["xi"]), gamma=float(p["gamma"]),
-                            pseudo_update=bool(p["pseudo_update"]), feedback=bool(p["feedback"]))
+        wrong = [k for k in ("dod", "xi", "gamma") if isinstance(p[k], bool) or not isinstance(p[k], (int, float))]
+        wrong += [k for k in ("pseudo_update", "feedback") if not isinstance(p[k], bool)]
+        wrong += [] if isinstance(p["seed"], int) and not isinstance(p["seed"], bool) and p["seed"] >= 0 else ["seed"]
+        if wrong:
+            raise CheckpointError(f"{where}: corrupt checkpoint (params: bad {', '.join(wrong)})")
+        try:  # set_params checks everything before it changes anything
+            core.set_params(dod=p["dod"], xi=p["xi"], gamma=p["gamma"], pseudo_update=p["pseudo_update"],
+                            feedback=p["feedback"])
         except (TypeError, ValueError) as exc:
             raise CheckpointError(f"{where}: corrupt checkpoint (params: {exc})") from None
-        core.seed = int(p["seed"])
+        core.seed = p["seed"]
     core.q.q = q.q
     core.rng = rng
 

@@ -1,0 +1,160 @@
+"""Property tests of the inputs added for issues 11-13 that are not messages (those are in
+test_decode_boundary): path parameters, namespaces, the overrides parameter, the graph's secret
+file, numeric command-line options, checkpoint files and the robot's answer to
+ALSystem.systemVersion. Each either accepts a valid value or refuses it with its own error type;
+nothing else escapes."""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import json
+import os
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from homeo_decision.agent import DecisionCore
+from homeo_decision.checkpoint import CheckpointError, decision_checkpoint, load, restore_decision
+from homeo_decision.node_runtime import load_node_scenario, overrides_param
+from homeo_decision.scenario import ScenarioError
+from homeo_launch.processes import check_namespace
+from homeo_msgs_py.auth import ENV, AuthError, load_signer
+from homeo_msgs_py.cli_args import int_at_least
+from homeo_msgs_py.data_dir import OutsideDataDir, resolve
+from homeo_msgs_py.node_base import NodeConfigError
+from pepper_bridge.mapping import emotion_scale
+
+SCALARS = (st.none() | st.booleans() | st.integers() | st.floats() | st.text(max_size=30)
+           | st.sampled_from(["", ".", "..", "/", "\0", "~", "2.5", "2.4.3", "a=1", "=", "initial_q=0.5"]))
+JSON = st.recursive(SCALARS, lambda inner: st.lists(inner, max_size=3)
+                    | st.dictionaries(st.text(max_size=8), inner, max_size=3), max_leaves=10)
+pytestmark = pytest.mark.filterwarnings("ignore::hypothesis.errors.HypothesisWarning")  # a large drawn value
+FAST = settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow,
+                                                                         HealthCheck.function_scoped_fixture])
+
+
+@FAST
+@given(path=st.text(max_size=40) | st.sampled_from(["../x", "a/../../x", "/etc/passwd", "link/x", "sub/x"]))
+def test_a_path_parameter_resolves_inside_the_data_dir_or_is_refused(tmp_path, path):
+    base = tmp_path / "out"
+    (base / "sub").mkdir(parents=True, exist_ok=True)
+    if not (base / "link").exists():
+        (base / "link").symlink_to(tmp_path)
+    try:
+        full = resolve(str(base), path, "q_table_path")
+    except OutsideDataDir as exc:
+        assert "\n" not in str(exc)
+        return
+    real = os.path.realpath(base)
+    if not path:
+        assert full == ""
+    else:
+        assert os.path.commonpath([real, full]) == real and full != real
+
+
+@FAST
+@given(ns=st.text(max_size=20))
+def test_a_namespace_is_a_ros_name_or_refused(ns):
+    try:
+        out = check_namespace(ns)
+    except ValueError:
+        return
+    assert out == "" or (out.startswith("/") and "//" not in out and out.rstrip("/") == out)
+    assert check_namespace(out) == out  # normalised once and for all
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(items=st.lists(SCALARS, max_size=4))
+def test_the_overrides_parameter_builds_a_scenario_or_is_refused(items):
+    try:
+        load_node_scenario("", items)
+    except (NodeConfigError, ScenarioError) as exc:
+        assert "\n" not in str(exc)
+
+
+def test_overrides_round_trip_through_the_parameter():
+    ov = {"initial_q": 0.5, "always_valid_actions": ["Rest", "Chat"], "serving_growth": "unsatisfied"}
+    sc = load_node_scenario("", overrides_param(ov))
+    assert sc.open["initial_q"] == 0.5 and list(sc.open["always_valid_actions"]) == ["Rest", "Chat"]
+    assert overrides_param({}) == [""]
+
+
+@FAST
+@given(content=st.binary(max_size=80), mode=st.sampled_from([0o600, 0o644, 0o640, 0o400]))
+def test_the_secret_file_is_a_signer_or_a_one_line_error(tmp_path, content, mode):
+    f = tmp_path / "graph.key"
+    if f.exists():
+        os.chmod(f, 0o600)
+    f.write_bytes(content)
+    os.chmod(f, mode)
+    try:
+        signer = load_signer({ENV: str(f)})
+    except AuthError as exc:
+        assert "\n" not in str(exc)
+        return
+    assert mode & 0o077 == 0 and signer is not None  # a file others can read is never accepted
+
+
+@FAST
+@given(text=st.text(max_size=40) | st.integers().map(str))
+def test_numeric_options_are_in_range_or_refused(text):
+    conv = int_at_least(0, 2**31 - 1)
+    try:
+        v = conv(text)
+    except argparse.ArgumentTypeError as exc:
+        assert "\n" not in str(exc) and len(str(exc)) < 400  # the value is cut to 32 characters
+        return
+    assert 0 <= v <= 2**31 - 1
+
+
+@pytest.fixture(scope="module")
+def trained(thesis):
+    core = DecisionCore(thesis, 3)
+    for _ in range(30):  # some draws, so the stream's state is not the initial one
+        core.rng.random()
+    return core, decision_checkpoint(core, 30, 0)
+
+
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow,
+                                                                   HealthCheck.function_scoped_fixture])
+@given(data=st.data())
+def test_a_checkpoint_with_any_field_changed_restores_whole_or_not_at_all(thesis, trained, data, tmp_path):
+    """As the node reads one: the file (checkpoint.load), then the restore."""
+    _, ck = trained
+    bad = copy.deepcopy(ck)
+    where = data.draw(st.sampled_from(["params", "rng", "state", "state.tables", "state.objects", "ticks",
+                                       "tick_offset", "version"]))
+    target = bad
+    *path, last = where.split(".")
+    for p in path:
+        target = target[p]
+    if isinstance(target.get(last), dict) and target[last] and data.draw(st.booleans()):
+        inner = data.draw(st.sampled_from(sorted(target[last])))
+        target[last][inner] = data.draw(JSON)
+    else:
+        target[last] = data.draw(JSON)
+    core = DecisionCore(thesis, 1)
+    before = (json.dumps(core.q.q), core.seed, core.dod, core.rng.state())
+    f = tmp_path / "homeo_decision.json"
+    f.write_text(json.dumps(bad))
+    try:
+        restore_decision(core, load(f, "homeo_decision"), "f", params=True)
+    except CheckpointError as exc:
+        assert "\n" not in str(exc)
+        assert (json.dumps(core.q.q), core.seed, core.dod, core.rng.state()) == before
+
+
+@FAST
+@given(value=JSON)
+def test_any_answer_to_system_version_has_a_scale_or_is_refused(value):
+    """ALSystem.systemVersion returns a string such as "2.5.5.5" (NAOqi SDK ALSystemProxy: "running
+    system version"); the bridge refuses anything else with the default scale (bridge._ask_version)."""
+    try:
+        scale = emotion_scale(value)
+    except (ValueError, TypeError):
+        return
+    from pepper_bridge.mapping import EMOTION_SCALES
+
+    assert scale == EMOTION_SCALES[".".join(str(value).strip().split(".")[:2])]
