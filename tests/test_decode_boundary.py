@@ -37,7 +37,7 @@ JSON = st.recursive(SCALARS, lambda inner: st.lists(inner, max_size=4)
 
 def _sample_messages(sc) -> dict[str, list[str]]:
     """Real messages of each topic from a short run of the graph's logic (the bus of test_graph_stages)."""
-    from test_graph_stages import Bus
+    from test_graph_stages import Bus, graph_readers, robot_hosts
 
     bus = Bus(vocabulary(sc), 0)
     side = SimWorldSide(sc, 1, intention_accuracy=True)
@@ -48,12 +48,7 @@ def _sample_messages(sc) -> dict[str, list[str]]:
         sent.setdefault(key, []).append(bus.queue[-1][1])
 
     driver = LockstepDriver(side, send, iterations=3)
-    hosts = {"homeo_intention": RecognitionHost(sc, BAYES), "homeo_drives": PerceptionHost(sc),
-             "homeo_decision": DecisionHost(sc, DecisionCore(sc, 1))}
-    readers: dict[str, list[str]] = {}
-    for n in GRAPHS["sim"]:
-        for i in NODES[n].reads(True):
-            readers.setdefault(i.topic, []).append(n)
+    hosts, readers = robot_hosts(sc, BAYES, 1), graph_readers(True)
     driver.begin()
     for _ in range(40):
         for key, m in bus.drain():

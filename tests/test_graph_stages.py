@@ -44,6 +44,21 @@ class Bus:
         return out
 
 
+def graph_readers(learning: bool) -> dict:
+    """Topic key -> the nodes of the simulated graph that read it (``homeo_msgs_py.graph``)."""
+    readers: dict = {}
+    for n in GRAPHS["sim"]:
+        for i in NODES[n].reads(learning):
+            readers.setdefault(i.topic, []).append(n)
+    return readers
+
+
+def robot_hosts(sc, mode: str, seed: int) -> dict:
+    """The robot nodes' hosts, as the nodes build them."""
+    return {"homeo_intention": RecognitionHost(sc, mode), "homeo_drives": PerceptionHost(sc),
+            "homeo_decision": DecisionHost(sc, DecisionCore(sc, seed))}
+
+
 def run_bus_graph(sc, seed: int, iterations: int, shuffle_seed: int = 0, mode: str = ORACLE):
     """The simulated graph of ``homeo_msgs_py.graph`` on the bus: the world node's driver and side,
     and the robot nodes' hosts, routed by who reads what."""
@@ -51,12 +66,7 @@ def run_bus_graph(sc, seed: int, iterations: int, shuffle_seed: int = 0, mode: s
     learning = mode == BAYES
     side = SimWorldSide(sc, seed, intention_accuracy=learning)
     driver = LockstepDriver(side, bus.send, iterations=iterations)
-    hosts = {"homeo_intention": RecognitionHost(sc, mode), "homeo_drives": PerceptionHost(sc),
-             "homeo_decision": DecisionHost(sc, DecisionCore(sc, seed))}
-    readers = {}
-    for n in GRAPHS["sim"]:
-        for i in NODES[n].reads(learning):
-            readers.setdefault(i.topic, []).append(n)
+    hosts, readers = robot_hosts(sc, mode, seed), graph_readers(learning)
     actions = []
     driver.begin()
     while driver.state != DONE:
@@ -158,12 +168,7 @@ def test_lost_messages_cost_one_timeout_each_and_nothing_else(thesis):
 
     side = SimWorldSide(thesis, seed)
     driver = LockstepDriver(side, lossy, iterations=n, timeout=5.0, clock=lambda: now[0])
-    hosts = {"homeo_intention": RecognitionHost(thesis, ORACLE), "homeo_drives": PerceptionHost(thesis),
-             "homeo_decision": DecisionHost(thesis, DecisionCore(thesis, seed))}
-    readers = {}
-    for node in GRAPHS["sim"]:
-        for i in NODES[node].reads(False):
-            readers.setdefault(i.topic, []).append(node)
+    hosts, readers = robot_hosts(thesis, ORACLE, seed), graph_readers(False)
     stalls = 0
     driver.begin()
     while driver.state != DONE:

@@ -80,3 +80,16 @@ def status(name: str, ck: checkpoint.Checkpointer, ticks: int, skipped: int) -> 
             "message": ck.last_error or (f"last at tick {ck.last_ticks}" if ck.saved else "none written yet"),
             "values": {"learned_ticks": str(ticks), "written": str(ck.saved), "failed": str(ck.failed),
                        "path": str(ck.path or ""), "skipped_ticks": str(skipped)}}
+
+
+class CheckpointedNode:
+    """Mixed into a robot node that writes checkpoints (``self.checkpoints``, ``self.ticks``,
+    ``self.host.stage``): their health on /diagnostics, and the last one written at shutdown."""
+
+    def extra_statuses(self) -> list[dict]:
+        return [status(self.get_name(), self.checkpoints, self.ticks, getattr(self.host.stage.join, "skipped", 0))]
+
+    def destroy_node(self):
+        if self.ticks > 0 and self.checkpoints.last_ticks != self.ticks:
+            self.checkpoints.save()  # at shutdown (Ctrl-C, SIGTERM, the launcher's stop)
+        return super().destroy_node()

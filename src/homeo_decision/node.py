@@ -42,7 +42,7 @@ def _float_param(lo: float, hi: float, text: str) -> ParameterDescriptor:
     return ParameterDescriptor(description=text, floating_point_range=[FloatingPointRange(from_value=lo, to_value=hi)])
 
 
-class DecisionNode(ScenarioNode):
+class DecisionNode(durable.CheckpointedNode, ScenarioNode):
     def __init__(self):
         super().__init__(DESC.name)
         L = self.sc.learning
@@ -142,14 +142,6 @@ class DecisionNode(ScenarioNode):
             self.send(self.pub, k, fields, self.host.stage.run)
             self.ticks = self.core.tick_offset + k + (0 if fields.get("final") else 1)
             self.checkpoints.after_tick(self.ticks)
-
-    def extra_statuses(self) -> list[dict]:
-        return [durable.status(DESC.name, self.checkpoints, self.ticks, getattr(self.host.stage.join, "skipped", 0))]
-
-    def destroy_node(self):
-        if self.ticks > 0 and self.checkpoints.last_ticks != self.ticks:
-            self.checkpoints.save()  # at shutdown (Ctrl-C, SIGTERM, the launcher's stop)
-        return super().destroy_node()
 
     # -- services -------------------------------------------------------------------------
     def _load(self) -> tuple[bool, str]:

@@ -35,7 +35,7 @@ from .recognition import RecognitionHost
 DESC = NODES["homeo_intention"]
 
 
-class IntentionNode(ScenarioNode):
+class IntentionNode(durable.CheckpointedNode, ScenarioNode):
     def __init__(self):
         super().__init__(DESC.name)
         self.declare_fixed("mode", BAYES, ParameterDescriptor(
@@ -99,14 +99,6 @@ class IntentionNode(ScenarioNode):
         self.get_logger().info(
             f"{'rejoined' if respawned else 'resumed'} from {where}: ticks {ck['ticks']}, tick offset "
             f"{self.tick_offset}, learned state {checkpoint.digest(intention_learned(self.part.model))}")
-
-    def extra_statuses(self) -> list[dict]:
-        return [durable.status(DESC.name, self.checkpoints, self.ticks, getattr(self.host.stage.join, "skipped", 0))]
-
-    def destroy_node(self):
-        if self.ticks > 0 and self.checkpoints.last_ticks != self.ticks:
-            self.checkpoints.save()  # at shutdown (Ctrl-C, SIGTERM, the launcher's stop)
-        return super().destroy_node()
 
     def _on_params(self, params) -> SetParametersResult:
         for prm in params:

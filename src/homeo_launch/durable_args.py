@@ -29,14 +29,9 @@ def durable_options(a, graph: str, sc, bayes: bool) -> dict:
     """SimOptions fields from the arguments; a resume folder that cannot be used is a UserError."""
     if a.no_checkpoints and a.checkpoint_dir:
         raise UserError("--checkpoint-dir and --no-checkpoints contradict each other")
-    from homeo_msgs_py.data_dir import OutsideDataDir, resolve
+    from homeo_msgs_py.data_dir import options_inside
 
-    for opt, d in (("--checkpoint-dir", a.checkpoint_dir), ("--resume", a.resume)):
-        if d:
-            try:
-                resolve(a.data_dir, os.path.abspath(d), opt)
-            except OutsideDataDir as exc:
-                raise UserError(f"{exc} (give --data-dir, or a path under it)") from None
+    options_inside(a.data_dir, [("--checkpoint-dir", a.checkpoint_dir), ("--resume", a.resume)])
     if a.resume and getattr(a, "load_q", None):
         raise UserError("--resume and --load-q: the checkpoint holds the Q-table; give one of them")
     if a.resume:

@@ -95,10 +95,12 @@ class Monitor:
         self.rclpy.try_shutdown()
 
 
-def wait_until_up(graph: Graph, mon: Monitor, nodes, endpoints, bound: float) -> None:
+def wait_until_up(graph: Graph, mon: Monitor, nodes, endpoints, bound: float, check=None) -> None:
+    """Until every node and endpoint of the graph is discovered; ``check`` (default: no node has
+    died) runs on every turn and raises to stop the wait."""
     end = time.monotonic() + bound
     while True:
-        check_alive(graph)
+        check() if check is not None else check_alive(graph)
         missing = mon.missing(nodes, endpoints)
         if not missing:
             return

@@ -270,15 +270,9 @@ def check_files(a, read=(), write=()) -> None:
     """The file options of a launch, before anything starts: each inside ``--data-dir`` (the nodes
     refuse any other place), the ones read existing, the ones written not a directory and in a
     place that exists or can be made; ``--log-dir`` writable. Raises UserError (one line)."""
-    from homeo_msgs_py.data_dir import OutsideDataDir, resolve
+    from homeo_msgs_py.data_dir import options_inside
 
-    for opt, f in (*((o, f) for o, f in read), *((o, f) for o, f in write)):
-        if not f:
-            continue
-        try:
-            resolve(a.data_dir, os.path.abspath(f), opt)
-        except OutsideDataDir as exc:
-            raise UserError(f"{exc} (give --data-dir, or a path under it)") from None
+    options_inside(a.data_dir, [*read, *write])
     for opt, f in read:
         if f and not os.path.isfile(f):
             raise UserError(f"{opt} {f}: file not found")

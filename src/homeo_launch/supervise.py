@@ -13,6 +13,7 @@ import time
 
 from homeo_msgs_py.graph import NODES
 
+from . import monitor
 from .monitor import GraphError
 from .processes import Graph
 
@@ -105,12 +106,4 @@ def _keep_log(g: Graph, name: str, n: int) -> None:
 def wait_until_up(graph: Graph, mon, sup: Supervisor, nodes, endpoints, bound: float) -> None:
     """``monitor.wait_until_up`` with supervision: the run may start (the world node decides) while
     the launcher is still discovering, and a node that dies then is restarted as later."""
-    end = time.monotonic() + bound
-    while True:
-        sup.check()
-        missing = mon.missing(nodes, endpoints)
-        if not missing:
-            return
-        if time.monotonic() > end:
-            raise GraphError(f"the graph did not come up within {bound:g} s; missing: {'; '.join(missing)}")
-        mon.spin(0.1)
+    monitor.wait_until_up(graph, mon, nodes, endpoints, bound, check=sup.check)

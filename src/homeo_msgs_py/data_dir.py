@@ -35,3 +35,16 @@ def resolve(data_dir: str, path: str, what: str = "path") -> str:
     if full == base or os.path.commonpath([base, full]) != base:
         raise OutsideDataDir(f"{what} {path} is outside the data directory {base}")
     return full
+
+
+def options_inside(data_dir: str, named) -> None:
+    """Command-line file options ``(option, path)`` (paths as given, from the working directory)
+    inside ``data_dir``, where the nodes will accept them; else a one-line ``UserError``."""
+    from .cli_args import UserError
+
+    for opt, f in named:
+        if f:
+            try:
+                resolve(data_dir, os.path.abspath(f), opt)
+            except OutsideDataDir as exc:
+                raise UserError(f"{exc} (give --data-dir, or a path under it)") from None

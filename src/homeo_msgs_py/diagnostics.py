@@ -20,10 +20,12 @@ class RejectLog:
     notes: Counter = field(default_factory=Counter)  # other counted events, e.g. missed ticks
     changed: bool = False
 
-    def reject(self, topic: str, reason: str) -> None:
+    def reject(self, topic: str, reason: str) -> str:
+        """Count one dropped message; returns the reason as kept (cut: a sender's text must not
+        flood /diagnostics or the log)."""
         from .schemas import short
 
-        reason = short(reason)  # a sender's text must not flood /diagnostics
+        reason = short(reason)
         self.counts[topic] += 1
         self.last[topic] = reason
         r = self.recent.setdefault(topic, [])
@@ -31,6 +33,7 @@ class RejectLog:
             r.append(reason)
             del r[:-RECENT]
         self.changed = True
+        return reason
 
     def note(self, what: str, n: int = 1) -> None:
         self.notes[what] += n

@@ -157,7 +157,8 @@ class LockstepDriver:
         self._action: Message | None = None
         self._last_fields: dict | None = None  # the last action message's fields (drives for the metrics)
         self._last_msg: Message | None = None  # the last action message taken (its repeats are no-ops)
-        self._sent: tuple = ()  # what this tick published: (outcome of k-1 or None, observation, world)
+        self._outcome: tuple | None = None  # (tick, fields) of the last outcome sent
+        self._observed: tuple | None = None  # (observation, world) fields of this tick, once sent
         self._resent = False
         self._since = self.clock()
         self._due: float | None = None
@@ -204,7 +205,7 @@ class LockstepDriver:
                 return
             world, seen = res
             self.phase, self._since = "act", now
-            self._sent = (self._sent[0] if self._sent else None, seen, world)
+            self._observed = (seen, world)
             self.send("observation", self.tick, seen, self.run)  # first: the critical path starts here
             self.send("world", self.tick, world, self.run)
         elif kind == "step":
@@ -213,7 +214,7 @@ class LockstepDriver:
                 self.missed += 1
                 self.note("missed ticks")
             self.send("outcome", self.tick, fields, self.run)
-            self._sent = ((self.tick, fields),)
+            self._outcome, self._observed = (self.tick, fields), None
             self.tick += 1
             if self.iterations and self.tick >= self.iterations:
                 self.state = FINISHING  # the last drives come back with a final message
@@ -259,12 +260,11 @@ class LockstepDriver:
         self._resent, self._since = True, now
         self.note("resent ticks")
         self.log(f"no action for tick {self.tick} within {self.timeout:g} s: sending the tick again")
-        last, seen, world = self._sent if len(self._sent) == 3 else (None, None, None)
-        if last is not None:
-            self.send("outcome", last[0], last[1], self.run)
-        if seen is not None:
-            self.send("observation", self.tick, seen, self.run)
-            self.send("world", self.tick, world, self.run)
+        if self._outcome is not None:
+            self.send("outcome", *self._outcome, self.run)
+        if self._observed is not None:
+            self.send("observation", self.tick, self._observed[0], self.run)
+            self.send("world", self.tick, self._observed[1], self.run)
 
     # -- actions ---------------------------------------------------------------------------
     def on_action(self, msg: Message) -> None:

@@ -21,7 +21,7 @@ from .auth import AuthError, load_signer
 from .diagnostics import RejectLog
 from .graph import DIAGNOSTICS, LAUNCHER, NODES, RECORDER, SIGNED, TOPICS, own_endpoints
 from .qos import pub_qos, quiet_pub_events, quiet_sub_events, sub_qos
-from .schemas import Message, Rejected, Vocabulary, decode, encode, short
+from .schemas import Message, Rejected, Vocabulary, decode, encode
 
 DIAG_PERIOD_S = 1.0
 
@@ -180,8 +180,7 @@ class HomeoNode(Node):
         return out
 
     def reject(self, topic: str, reason: str) -> None:
-        reason = short(reason)
-        self.rejects.reject(topic, reason)
+        reason = self.rejects.reject(topic, reason)
         self.get_logger().warning(f"dropped a message on {topic}: {reason}", throttle_duration_sec=1.0)
         if self.rejects.counts[topic] == 1:
             self.publish_diagnostics()  # the first of a kind goes out at once

@@ -5,6 +5,8 @@ from __future__ import annotations
 import math
 from typing import Sequence
 
+from homeo_msgs_py.schemas import finite
+
 # two-sided 95% Student-t quantiles t_{0.975, df} for df = 1..30; beyond that 1.96 is close enough
 _T975 = [12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160, 2.145, 2.131,
          2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048, 2.045, 2.042]
@@ -44,12 +46,6 @@ def aggregate(per_seed: Sequence[dict], drive_names: Sequence[str]) -> dict:
     }
 
 
-def json_safe(obj):
-    """Replace NaN/inf (e.g. HSR of a run in which nobody wanted anything) by null: strict JSON."""
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {k: json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [json_safe(v) for v in obj]
-    return obj
+# NaN/inf (e.g. HSR of a run in which nobody wanted anything) become null: strict JSON, as the
+# graph's messages do
+json_safe = finite

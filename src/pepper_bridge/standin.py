@@ -515,34 +515,25 @@ class StandinRobot:
             def unsubscribe(self, name):
                 robot.record("ALSpeechRecognition", "unsubscribe", name)
 
-        class ALPeoplePerception:  # an extractor (ALExtractor API): subscribe / unsubscribe
-            @qi.bind(qi.Void, [qi.String])
-            def subscribe(self, name):
-                robot.record("ALPeoplePerception", "subscribe", name)
+        def extractor(service: str):
+            """An extractor (ALExtractor API): subscribe / unsubscribe, each recorded."""
+            class Extractor:
+                @qi.bind(qi.Void, [qi.String])
+                def subscribe(self, name):
+                    robot.record(service, "subscribe", name)
 
-            @qi.bind(qi.Void, [qi.String])
-            def unsubscribe(self, name):
-                robot.record("ALPeoplePerception", "unsubscribe", name)
+                @qi.bind(qi.Void, [qi.String])
+                def unsubscribe(self, name):
+                    robot.record(service, "unsubscribe", name)
 
-        class ALEngagementZones:
-            @qi.bind(qi.Void, [qi.String])
-            def subscribe(self, name):
-                robot.record("ALEngagementZones", "subscribe", name)
+            Extractor.__name__ = service
+            return Extractor
 
-            @qi.bind(qi.Void, [qi.String])
-            def unsubscribe(self, name):
-                robot.record("ALEngagementZones", "unsubscribe", name)
-
+        ALPeoplePerception = extractor("ALPeoplePerception")
+        ALEngagementZones = extractor("ALEngagementZones")
         # EmotionRecognized values come from user.angry_voice / calm_voice: the documented shape and
         # scale (http://doc.aldebaran.com/2-5/naoqi/audio/alvoiceemotionanalysis.html: 0..10; 2-4: 0..5)
-        class ALVoiceEmotionAnalysis:
-            @qi.bind(qi.Void, [qi.String])
-            def subscribe(self, name):
-                robot.record("ALVoiceEmotionAnalysis", "subscribe", name)
-
-            @qi.bind(qi.Void, [qi.String])
-            def unsubscribe(self, name):
-                robot.record("ALVoiceEmotionAnalysis", "unsubscribe", name)
+        ALVoiceEmotionAnalysis = extractor("ALVoiceEmotionAnalysis")
 
         class ALSystem:  # NAOqi SDK ALSystemProxy: std::string systemVersion() "running system version"
             @qi.bind(qi.String, [])
