@@ -32,7 +32,7 @@ class DrivesNode(ScenarioNode):
         if self.declare_fixed("supervised", False, ParameterDescriptor(
                 description="restarted nodes rejoin the run: skip a gap of ticks")):
             make_rejoinable(self.host.stage)  # an upstream node that died must not wedge this one
-        self.pub = self.publisher("drives")
+        self.pub = self.robot_publisher("drives")
         for i in DESC.inputs:
             self.subscribe(i.topic, lambda m, key=i.topic: self._put(key, m))
 

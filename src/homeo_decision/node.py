@@ -82,7 +82,7 @@ class DecisionNode(durable.CheckpointedNode, ScenarioNode):
             lambda text: self.get_logger().warning(text))
         self.add_on_set_parameters_callback(self._on_params)
 
-        self.pub = self.publisher("action", min_subs=1)
+        self.pub = self.robot_publisher("action")
         self.subscribe("drives", lambda m: self._put("drives", m))
         self.create_service(Trigger, "~/save_q", self._on_save)
         self.create_service(Trigger, "~/load_q", self._on_load)

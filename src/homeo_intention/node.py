@@ -68,7 +68,7 @@ class IntentionNode(durable.CheckpointedNode, ScenarioNode):
             lambda: intention_checkpoint(self.part.model, self.ticks, self.tick_offset, max(0, self.host.stage.run),
                                          mode, self.durable["session"]),
             lambda text: self.get_logger().warning(text))
-        self.pub = self.publisher("intention")
+        self.pub = self.robot_publisher("intention")
         for i in DESC.reads(self.part.learns):
             self.subscribe(i.topic, lambda m, key=i.topic: self._put(key, m))
         self.create_service(Trigger, "~/save_model", self._on_save)

@@ -234,7 +234,8 @@ def pepper_specs(*, url: str, scenario: str, overrides: dict, seed: int, dod: fl
                  data_dir: str = "out", durable: dict | None = None) -> list[NodeSpec]:
     from homeo_decision.node_runtime import overrides_param
 
-    common = {"scenario": scenario, "overrides": overrides_param(overrides), "data_dir": os.path.abspath(data_dir)}
+    common = {"scenario": scenario, "overrides": overrides_param(overrides), "data_dir": os.path.abspath(data_dir),
+              "extra_readers": extra_readers}
     decision = dict(common, seed=seed)
     if dod is not None:
         decision["dod"] = float(dod)
@@ -244,7 +245,7 @@ def pepper_specs(*, url: str, scenario: str, overrides: dict, seed: int, dod: fl
     bridge = dict(common, qi_url=url, user=user, password=password, config=os.path.abspath(config) if config else "",
                   interactions=interactions, collect_window=float(collect_window), collect_quiet=float(collect_quiet),
                   action_timeout=float(action_timeout), end_with_script=end_with_script,
-                  intention_cues=intention == "cues", outcome_readers=endpoints(intention)["outcome"][1] + extra_readers,
+                  intention_cues=intention == "cues", outcome_readers=endpoints(intention)["outcome"][1],
                   naoqi_version=naoqi_version)
     params = {"pepper_bridge": bridge, "homeo_intention": dict(common, mode=INTENTION_MODES[intention]),
               "homeo_drives": dict(common), "homeo_decision": decision}
@@ -263,9 +264,8 @@ def run_pepper_graph(specs: list[NodeSpec], log_dir: Path, standin: StandinProce
                      auth: bool = True, max_restarts: int = 0, checkpoint_dir: str = "", quiet: bool = False) -> dict:
     """Run the bridge graph until the bridge reports done; returns its last run status fields.
     Raises GraphError (a node or the stand-in died, or the graph never came up) or KeyboardInterrupt.
-    ``sinks``: as for ``sim.run_graph``; the robot nodes start first and the bridge waits for the
-    tap on homeo/outcome (``outcome_readers``); its other topics are heard before its first
-    interaction, which collects the user's expression first."""
+    ``sinks``: as for ``sim.run_graph``; the robot nodes start first, and every node's topics wait
+    for the tap (``extra_readers``) before their first message."""
     os.environ.update(dds_defaults())
     graph = Graph(specs, env or graph_env(), str(log_dir), namespace=namespace, auth=auth)
     mon = tap = None

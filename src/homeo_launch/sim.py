@@ -70,7 +70,7 @@ def sim_specs(o: SimOptions) -> list[NodeSpec]:
     from homeo_decision.node_runtime import overrides_param
 
     common = {"scenario": o.scenario or "", "overrides": overrides_param(dict(o.overrides)),
-              "data_dir": os.path.abspath(o.data_dir)}
+              "data_dir": os.path.abspath(o.data_dir), "extra_readers": o.extra_readers}
     decision = dict(common, seed=o.seed)
     for k, v in (("dod", o.dod), ("xi", o.xi)):
         if v is not None:
@@ -84,7 +84,7 @@ def sim_specs(o: SimOptions) -> list[NodeSpec]:
         decision["load_on_start"] = True
     sim = dict(common, seed=o.seed, iterations=o.iterations, rate=float(o.rate),
                action_timeout=float(o.action_timeout), trace_path=os.path.abspath(o.trace) if o.trace else "",
-               intention_accuracy=o.intention == BAYES, extra_readers=o.extra_readers, human=o.human,
+               intention_accuracy=o.intention == BAYES, human=o.human,
                human_timeout=float(o.human_timeout))
     params = {"homeo_sim": sim, "homeo_intention": dict(common, mode=o.intention), "homeo_drives": dict(common),
               "homeo_decision": decision}

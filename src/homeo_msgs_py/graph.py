@@ -133,6 +133,12 @@ def readers(graph: str, topic: str, learning: bool) -> int:
     return endpoints(graph, learning).get(topic, (0, 0))[1]
 
 
+def min_readers(topic: str) -> int:
+    """The fewest nodes reading ``topic`` in any graph and mode: a robot node, which does not know
+    which graph it is in, waits for that many readers (and the launcher's tap) before it publishes."""
+    return min(readers(g, topic, learning) for g in GRAPHS for learning in (False, True))
+
+
 def own_endpoints(infos, nodes, namespace: str) -> int:
     """How many of the endpoints ``infos`` (rclpy ``TopicEndpointInfo``: node_name, node_namespace)
     belong to ``nodes`` in ``namespace``: a start gate counts its own graph, not whoever else

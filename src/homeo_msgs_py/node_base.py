@@ -19,7 +19,7 @@ from std_msgs.msg import String
 from . import data_dir
 from .auth import AuthError, load_signer
 from .diagnostics import RejectLog
-from .graph import DIAGNOSTICS, LAUNCHER, NODES, RECORDER, SIGNED, TOPICS, own_endpoints
+from .graph import DIAGNOSTICS, LAUNCHER, NODES, RECORDER, SIGNED, TOPICS, min_readers, own_endpoints
 from .qos import pub_qos, quiet_pub_events, quiet_sub_events, sub_qos
 from .schemas import Message, Rejected, Vocabulary, decode, encode
 
@@ -101,6 +101,12 @@ class HomeoNode(Node):
         self._fixed: dict = {}  # parameters set at start: a change is refused, the same value accepted
         self._data_dir = self.declare_fixed("data_dir", data_dir.default_dir(), ParameterDescriptor(
             description="files named by parameters (paths) live here; set at start"))
+        from rcl_interfaces.msg import IntegerRange
+
+        self.extra_readers = self.declare_fixed("extra_readers", 0, ParameterDescriptor(
+            description="readers beyond the graph's (a recorder, a live view) that this node's topics wait for "
+                        "before their first message: so that they miss nothing of the run; set at start",
+            integer_range=[IntegerRange(from_value=0, to_value=100, step=1)]))
         self.add_on_set_parameters_callback(self._guard_fixed)
         self._diag_pub = self.create_publisher(DiagnosticArray, DIAGNOSTICS, 10, event_callbacks=quiet_pub_events())
         self._diag_timer = self.create_timer(DIAG_PERIOD_S, self.publish_diagnostics)
@@ -130,6 +136,13 @@ class HomeoNode(Node):
     def publisher(self, key: str, min_subs: int = 0) -> GatedPublisher:
         """A writer of topic ``key`` (of ``graph.TOPICS``)."""
         return GatedPublisher(self, key, min_subs)
+
+    def robot_publisher(self, key: str) -> GatedPublisher:
+        """A robot node's writer of ``key``: its messages wait until the graph's readers and the
+        launcher's tap (``extra_readers``) have matched it. The tap hearing the writer is not the
+        writer having matched the tap (discovery is per side), and an event sent in between is
+        lost to the tap for good."""
+        return GatedPublisher(self, key, min_readers(key) + self.extra_readers)
 
     def send(self, pub: GatedPublisher, tick: int, fields: dict, run: int = 0) -> None:
         text = encode(pub.schema, tick, fields, run=run)

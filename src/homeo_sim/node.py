@@ -54,10 +54,6 @@ class SimNode(ScenarioNode):
         self.declare_parameter("trace_path", "", d(description="write one JSON line per tick here ('' = no trace)"))
         self.declare_parameter("wait_for_readers", True, d(description="start only when the graph's readers and "
                                                            "writers have matched"))
-        self.declare_fixed("extra_readers", 0, d(
-            description="readers beyond the graph's to wait for on every topic before tick 0 (a recorder, a live "
-                        "view): so that they miss nothing of the run",
-            integer_range=[IntegerRange(from_value=0, to_value=100, step=1)]))
         self.declare_fixed("intention_accuracy", False, d(
             description="score the recognised intention of each action against the human's (bayes mode); the "
                         "intention node then learns from the outcome, so the gate waits for its reader too"))
@@ -158,7 +154,7 @@ class SimNode(ScenarioNode):
     def _missing(self) -> list[str]:
         if not self.get_parameter("wait_for_readers").value:
             return []
-        extra = self.get_parameter("extra_readers").value
+        extra = self.extra_readers
         return self.gate_missing(self.pubs, lambda key: readers("sim", key, self.learning) + extra,
                                  [i.topic for i in DESC.inputs])
 

@@ -252,8 +252,8 @@ class BridgeNode(ScenarioNode):
             return out
         pubs = {k: p for k, p in self.pubs.items() if k != "run_status"}  # read by the launcher, not a node
         outcome = self.get_parameter("outcome_readers").value
-        return out + self.gate_missing(pubs, lambda key: outcome if key == "outcome"
-                                       else G.readers("pepper", key, self.learning), [i.topic for i in DESC.inputs])
+        return out + self.gate_missing(pubs, lambda key: self.extra_readers + (
+            outcome if key == "outcome" else G.readers("pepper", key, self.learning)), [i.topic for i in DESC.inputs])
 
     # -- status and diagnostics ----------------------------------------------------------------
     def _publish_status(self) -> None:
