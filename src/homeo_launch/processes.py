@@ -36,8 +36,10 @@ class NodeSpec:
 
 def dds_defaults(env=os.environ) -> dict:
     """DDS settings of the project, each unless the user set it: discovery on this machine only,
-    and Fast DDS over UDP on loopback rather than shared memory, whose segments a killed process
-    leaves behind in /dev/shm (and later processes then print lock errors on stdout)."""
+    and Fast DDS's built-in transports limited to UDP. With discovery on this machine only,
+    rmw_fastrtps (Jazzy) sets its own transports, shared memory and UDP on loopback, and the
+    second setting has no effect (seen: ``dds.shm.*`` threads in every node); it applies when
+    the user widens the range (ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET)."""
     return {k: env.get(k, v) for k, v in (("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST"),
                                           ("FASTDDS_BUILTIN_TRANSPORTS", "UDPv4"))}
 
