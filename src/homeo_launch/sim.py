@@ -381,6 +381,7 @@ def cmd_sim(a) -> int:
     restarts = status.get("restarts")
     if restarts:  # only when there were any: an undisturbed run prints what homeo-sim run prints
         out["restarts"] = restarts
+        out["missed"] = status.get("missed", 0)  # the ticks the restarts cost
     if a.json:
         print(json.dumps(json_safe(out)))
     else:
