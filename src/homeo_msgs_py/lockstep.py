@@ -387,6 +387,12 @@ class JoinedStage:
     def run(self) -> int:
         return self.join.run
 
+    def resume_after(self, run: int, tick: int, fields: dict) -> None:
+        """A restarted node goes on after ``tick`` of ``run``, whose answer was ``fields`` (its
+        checkpoint): an input of that tick again is answered with them."""
+        self.join.restart(run, at=tick + 1)
+        self._last = (run, tick, fields)
+
     def put(self, key: str, msg: Message) -> list[tuple[int, dict]]:
         """Take one input (raises Rejected); returns ``(tick, fields to publish)`` per completed tick."""
         run = self.join.run
