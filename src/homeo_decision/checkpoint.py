@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 from pathlib import Path
 
@@ -77,6 +78,54 @@ def check_envelope(raw, node: str, where: str) -> dict:
     if not isinstance(raw.get("params"), dict) or not isinstance(raw.get("state"), dict):
         raise CheckpointError(f"{where}: corrupt checkpoint (params and state must be objects)")
     return raw
+
+
+# -- the world nodes' parts (homeo_sim.checkpoint, pepper_bridge.checkpoint) ----------------------------
+def check_int(v, what: str, lo: int = 0, hi: int = 2**62) -> int:
+    if type(v) is not int or not lo <= v <= hi:
+        raise CheckpointError(f"{what} must be an integer in {lo}..{hi}, got {str(v)[:40]!r}")
+    return v
+
+
+def check_number(v, what: str, lo: float, hi: float) -> float:
+    if type(v) not in (int, float) or not math.isfinite(v) or not lo <= v <= hi:
+        raise CheckpointError(f"{what} must be a number in {lo:g}..{hi:g}, got {str(v)[:40]!r}")
+    return float(v)
+
+
+def check_world_position(pos, sc, voc, where: str, world_tick: int | None = None) -> dict:
+    """The driver's position, checked: the last outcome must be a valid ``homeo/outcome`` of the tick before."""
+    try:
+        if not isinstance(pos, dict):
+            raise CheckpointError("not an object")
+        run, tick = check_int(pos.get("run"), "run"), check_int(pos.get("tick"), "tick", 0, 10**9)
+        out = {"run": run, "tick": tick, "missed": check_int(pos.get("missed"), "missed", 0, tick),
+               "iterations": check_int(pos.get("iterations"), "iterations", 0, 10**9),
+               "elapsed": check_number(pos.get("elapsed"), "elapsed", 0.0, 1e9), "outcome": None}
+        for key in ("done", "started"):
+            if type(pos.get(key)) is not bool:
+                raise CheckpointError(f"{key} must be true or false")
+            out[key] = pos[key]
+        if world_tick is not None and world_tick != tick:
+            raise CheckpointError(f"tick {tick} is not the environment's {world_tick}")
+        o = pos.get("outcome")
+        if o is not None:
+            if not isinstance(o, list) or len(o) != 2 or o[0] != tick - 1 or not isinstance(o[1], dict):
+                raise CheckpointError("outcome must be [the tick before, its fields]")
+            from homeo_msgs_py.schemas import Rejected, validate
+
+            try:
+                msg = validate(dict(o[1], schema="homeo/outcome", version=1, run=run, tick=tick - 1, stamp=0.0), voc,
+                               "homeo/outcome")
+            except Rejected as exc:
+                raise CheckpointError(f"outcome: {exc}") from None
+            out["outcome"] = (tick - 1, msg.fields)
+        elif tick > 0:
+            raise CheckpointError(f"no outcome of tick {tick - 1}")
+        return out
+    except CheckpointError as exc:
+        raise CheckpointError(f"{where}: corrupt checkpoint (position: {exc})") from None
+
 
 
 def digest(obj) -> str:

@@ -16,11 +16,9 @@ it changes anything, and a checkpoint of another scenario, human or recognition 
 
 from __future__ import annotations
 
-import math
-
-from homeo_decision.checkpoint import CheckpointError, digest, envelope
+from homeo_decision.checkpoint import CheckpointError, check_int as _int, check_number as _num, digest, envelope
+from homeo_decision.checkpoint import check_world_position as check_position
 from homeo_decision.codec import vocabulary
-from homeo_msgs_py.schemas import Rejected, validate
 
 NODE = "homeo_sim"
 CONFIG_CHECKED = ("scenario", "human", "intention_accuracy")  # a restart must be the same kind of run
@@ -46,18 +44,6 @@ def world_checkpoint(side, position: dict, config: dict, session: str = "") -> d
     return envelope(NODE, position["tick"], 0, position["run"], config, rng, state, session)
 
 
-def _int(v, what: str, lo: int = 0, hi: int = 2**62) -> int:
-    if type(v) is not int or not lo <= v <= hi:
-        raise CheckpointError(f"{what} must be an integer in {lo}..{hi}, got {str(v)[:40]!r}")
-    return v
-
-
-def _num(v, what: str, lo: float, hi: float) -> float:
-    if type(v) not in (int, float) or not math.isfinite(v) or not lo <= v <= hi:
-        raise CheckpointError(f"{what} must be a number in {lo:g}..{hi:g}, got {str(v)[:40]!r}")
-    return float(v)
-
-
 def check_config(p: dict, ours: dict, where: str) -> dict:
     """The checkpoint's run configuration, checked; refused when it is of another kind of run."""
     try:
@@ -73,38 +59,6 @@ def check_config(p: dict, ours: dict, where: str) -> dict:
                 "trace_bytes": None if tb is None else _int(tb, "trace_bytes")}
     except CheckpointError as exc:
         raise CheckpointError(f"{where}: corrupt checkpoint (params: {exc})") from None
-
-
-def check_position(pos, sc, voc, where: str, world_tick: int | None = None) -> dict:
-    """The driver's position, checked: the last outcome must be a valid ``homeo/outcome`` of the tick before."""
-    try:
-        if not isinstance(pos, dict):
-            raise CheckpointError("not an object")
-        run, tick = _int(pos.get("run"), "run"), _int(pos.get("tick"), "tick", 0, 10**9)
-        out = {"run": run, "tick": tick, "missed": _int(pos.get("missed"), "missed", 0, tick),
-               "iterations": _int(pos.get("iterations"), "iterations", 0, 10**9),
-               "elapsed": _num(pos.get("elapsed"), "elapsed", 0.0, 1e9), "outcome": None}
-        for key in ("done", "started"):
-            if type(pos.get(key)) is not bool:
-                raise CheckpointError(f"{key} must be true or false")
-            out[key] = pos[key]
-        if world_tick is not None and world_tick != tick:
-            raise CheckpointError(f"tick {tick} is not the environment's {world_tick}")
-        o = pos.get("outcome")
-        if o is not None:
-            if not isinstance(o, list) or len(o) != 2 or o[0] != tick - 1 or not isinstance(o[1], dict):
-                raise CheckpointError("outcome must be [the tick before, its fields]")
-            try:
-                msg = validate(dict(o[1], schema="homeo/outcome", version=1, run=run, tick=tick - 1, stamp=0.0), voc,
-                               "homeo/outcome")
-            except Rejected as exc:
-                raise CheckpointError(f"outcome: {exc}") from None
-            out["outcome"] = (tick - 1, msg.fields)
-        elif tick > 0:
-            raise CheckpointError(f"no outcome of tick {tick - 1}")
-        return out
-    except CheckpointError as exc:
-        raise CheckpointError(f"{where}: corrupt checkpoint (position: {exc})") from None
 
 
 def restore_world(side, ck: dict, ours: dict, where: str = "<memory>") -> tuple[dict, dict]:
