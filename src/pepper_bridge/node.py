@@ -269,7 +269,7 @@ class BridgeNode(durable.DurableWorld, ScenarioNode):
         self._send("run_status", drv.tick, fields, drv.run)
 
     def extra_statuses(self) -> list[dict]:
-        return [self.robot_status()]
+        return [self.robot_status(), *durable.DurableWorld.extra_statuses(self)]  # and its checkpoints
 
     def robot_status(self) -> dict:
         """The link and the bridge's diagnostics snapshot as one DiagnosticStatus (plain dict)."""
