@@ -214,3 +214,84 @@ def test_launcher_refuses_bad_checkpoint_options_in_one_line(tmp_path, args, why
     r = subprocess.run([sys.executable, "-m", "homeo_launch.cli", "sim", "--data-dir", str(tmp_path), *args],
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 2 and why in r.stderr and r.stderr.count("\n") == 1, r.stderr
+
+
+# -- the drives node: a checkpoint every tick, in two slots --------------------------------------------
+def test_a_drives_node_restored_mid_run_from_its_slots_perceives_exactly_as_the_one_that_was_not_killed(thesis,
+                                                                                                       tmp_path):
+    """The graph on the in-memory bus; at tick 137 the drives node is replaced by a new one restored
+    from its slot file (as written every tick); the run's actions and metrics equal the undisturbed
+    run's, and so the runner's: nothing of the drives was lost."""
+    from homeo_decision.hosts import PerceptionHost
+    from homeo_msgs_py.graph import NODES, ORACLE
+    from homeo_msgs_py.lockstep import DONE, LockstepDriver
+    from homeo_sim.world_side import SimWorldSide
+
+    from test_graph_stages import Bus, graph_readers, robot_hosts
+
+    def run(replace_at=None):
+        from homeo_decision.codec import vocabulary
+
+        bus = Bus(vocabulary(thesis), 0)
+        side = SimWorldSide(thesis, 3)
+        drv = LockstepDriver(side, bus.send, iterations=300)
+        hosts, readers = robot_hosts(thesis, ORACLE, 3), graph_readers(False)
+        ck = checkpoint.Checkpointer(str(tmp_path), "homeo_drives", 1, lambda: checkpoint.drives_checkpoint(
+            hosts["homeo_drives"].perception, 0, *answer[0]))
+        answer, actions = [None], []
+        drv.begin()
+        while drv.state != DONE:
+            for key, m in bus.drain():
+                for n in readers.get(key, []):
+                    if n == "homeo_sim":
+                        actions.append(m.fields["action"])
+                        drv.on_action(m)
+                        continue
+                    for k, fields in hosts[n].stage.put(key, m):
+                        if n == "homeo_drives":
+                            answer[0] = (k, fields)
+                            ck.save()
+                            if k == replace_at:  # killed after its write: a new process reads the slots
+                                hosts[n] = PerceptionHost(thesis)
+                                path = checkpoint.path_for(tmp_path, "homeo_drives")
+                                checkpoint.restore_drives(hosts[n], checkpoint.load(path, "homeo_drives"), str(path))
+                        bus.send(NODES[n].publishes[0], k, fields)
+        return actions, side.status(True)["metrics"]
+
+    ref = run()
+    assert run(replace_at=137) == ref
+    assert (tmp_path / "homeo_drives.slots").stat().st_size == 2 * checkpoint.SLOT_BYTES
+
+
+def test_a_torn_slot_leaves_the_other_and_a_bad_slot_file_is_one_line(thesis, tmp_path):
+    from homeo_decision.hosts import PerceptionHost
+
+    host = PerceptionHost(thesis)
+    path = tmp_path / "homeo_drives.slots"
+    w = checkpoint.SlotWriter(path)
+    ck1 = checkpoint.drives_checkpoint(host.perception, 0, 4, _drives_answer(thesis, host))
+    w.write(ck1)
+    ck2 = checkpoint.drives_checkpoint(host.perception, 0, 5, _drives_answer(thesis, host))
+    w.write(ck2)
+    assert checkpoint.load(path, "homeo_drives")["ticks"] == 6
+    raw = bytearray(path.read_bytes())
+    raw[checkpoint.SLOT_BYTES + 10:checkpoint.SLOT_BYTES + 20] = b"\0" * 10  # the newest slot torn
+    path.write_bytes(bytes(raw))
+    assert checkpoint.load(path, "homeo_drives")["ticks"] == 5
+    for bad, why in ((b"", "no whole slot"), (b"{" * 40, "no whole slot"), (b" " * (3 * checkpoint.SLOT_BYTES),
+                                                                              "longer than two slots")):
+        path.write_bytes(bad)
+        with pytest.raises(CheckpointError, match=why) as exc:
+            checkpoint.load(path, "homeo_drives")
+        assert "\n" not in str(exc.value)
+
+
+def _drives_answer(sc, host) -> dict:
+    """A drives message of the host's perception after a first tick in the initial world."""
+    from homeo_decision import codec
+
+    env = SimEnvironment(sc, 0)
+    obs = env.observe()
+    world = codec.world_fields(sc, obs)
+    perceived = host.perception.tick(obs.code, obs.intention, obs.body, None)
+    return codec.drives_fields(sc, perceived, world, None, host.perception.after_action)

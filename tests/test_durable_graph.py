@@ -193,23 +193,43 @@ def test_resume_continues_the_schedule_and_ctrl_c_saves_q(tmp_path):
 
 
 def test_the_drives_node_killed_mid_run_is_restarted_and_the_run_completes(tmp_path):
-    """The drives node learns nothing (no checkpoint): restarted, it perceives from the scenario's
-    initial drives again and the run goes on."""
+    """The drives node writes its state every tick (two slots, no fsync): restarted, it goes on from
+    exactly the state it had after the last tick it answered, not from the initial drives."""
     n = 400
-    p = _launch("--data-dir", str(tmp_path), "--iterations", str(n), "--rate", "50", "--action-timeout", "1", "--checkpoint-dir",
-                str(tmp_path / "ck"), "--checkpoint-every", "50", "--json", domain=fresh_domain())
+    logs, ck_dir = tmp_path / "logs", tmp_path / "ck"
+    p = _launch("--data-dir", str(tmp_path), "--iterations", str(n), "--rate", "50", "--action-timeout", "1",
+                "--checkpoint-dir", str(ck_dir), "--checkpoint-every", "50", "--log-dir", str(logs), "--json",
+                domain=fresh_domain())
+    out = err = ""
+    last = None
     try:
-        _wait_ticks(tmp_path / "ck" / "homeo_decision.json", 100, p)
+        _wait_ticks(ck_dir / "homeo_decision.json", 100, p)
         pid = _child(p.pid, "homeo_decision.drives_node")
+        assert pid is not None, "no drives node process found"
         os.kill(pid, signal.SIGKILL)
+        while Path(f"/proc/{pid}").exists() and _child(p.pid, "homeo_decision.drives_node") == pid:
+            time.sleep(0.01)
+        last = checkpoint.load(ck_dir / "homeo_drives.slots", "homeo_drives")  # what the killed process left
         out, err = p.communicate(timeout=240)
     finally:
         if p.poll() is None:
             p.kill()
-            p.communicate()
-    assert p.returncode == 0, err[-3000:]
+            out, err = p.communicate()
+        # on failure, everything the next person needs: the launcher's output and each node's log
+        report = f"exit {p.returncode}\nstdout: {out[-1500:]}\nstderr: {err[-3000:]}\n" + "\n".join(
+            f"--- {f.name}\n{f.read_text(errors='replace')[-2500:]}" for f in sorted(logs.glob("*.log")))
+    assert p.returncode == 0, report
     res = json.loads(out)
-    assert res["restarts"] == {"homeo_drives": 1} and res["iterations"] == n
+    assert res["restarts"] == {"homeo_drives": 1} and res["iterations"] == n, report
+    log = (logs / "homeo_drives.log").read_text()
+    m = re.search(r"rejoined from .*: run (\d+), tick (\d+), learned state ([0-9a-f]+)", log)
+    assert m, report
+    from homeo_decision.hosts import PerceptionHost
+
+    host = PerceptionHost(load_scenario())
+    checkpoint.restore_drives(host, last)
+    assert int(m.group(2)) == last["state"]["tick"] and int(m.group(2)) >= 100, report
+    assert m.group(3) == checkpoint.digest(checkpoint.drives_learned(host.perception)), report
 
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP])
@@ -232,3 +252,51 @@ def test_sigterm_and_sighup_stop_save_print_and_leave_no_temporary_folder(tmp_pa
     assert p.returncode == 0 and "HSR" in out, err[-2000:]  # an unbounded run: stopping it is its end
     assert list(tmp.iterdir()) == []
     assert _ticks(tmp_path / "ck" / "homeo_decision.json") > 100  # the final checkpoint
+
+
+def test_the_world_node_killed_mid_run_goes_on_with_the_same_run_and_counts_the_lost_ticks(tmp_path):
+    """The simulation node holds the run: killed, it is restarted, restores its checkpoint (world,
+    human, streams, metrics) and goes on after the newest tick the robot nodes answered; the ticks
+    since its checkpoint are missed. The run ends with exit 0, its metrics and the restart."""
+    ck_dir, logs = tmp_path / "ck", tmp_path / "logs"
+    n = 400
+    d = fresh_domain()
+    probe = Probe(d)
+    diag = probe.diagnostics()
+    p = _launch("--data-dir", str(tmp_path), "--iterations", str(n), "--rate", "50", "--action-timeout", "1",
+                "--checkpoint-dir", str(ck_dir), "--checkpoint-every", "50", "--log-dir", str(logs),
+                "--trace", str(tmp_path / "trace.jsonl"), "--json", domain=d)
+    err = ""
+    try:
+        path = ck_dir / "homeo_sim.json"
+        _wait_ticks(path, 100, p)
+        pid = _child(p.pid, "homeo_sim.node")
+        assert pid is not None
+        os.kill(pid, signal.SIGKILL)
+        last = json.loads(path.read_text())  # the killed process's last checkpoint
+        assert probe.spin_until(lambda: diag.get("homeo_launch: supervision", {}).get("values") == {"homeo_sim": "1"},
+                                60.0)
+        out, err = p.communicate(timeout=240)
+    finally:
+        probe.close()
+        if p.poll() is None:
+            p.kill()
+            err = p.communicate()[1]
+    log = (logs / "homeo_sim.log").read_text() if (logs / "homeo_sim.log").exists() else ""
+    assert p.returncode == 0, err[-3000:] + log[-3000:]
+    res = json.loads(out)
+    assert res["restarts"] == {"homeo_sim": 1} and res["iterations"] == n
+    assert res["metrics"]["HSR"]["per_seed"]
+    m = re.search(r"going on with run (\d+) at tick (\d+)", log)
+    assert m, log[-2000:]
+    run, at = int(m.group(1)), int(m.group(2))
+    assert run == last["run"] == 0 and at >= last["ticks"]
+    lost = at - last["ticks"]
+    assert lost <= 50 + 5  # at most about one checkpoint interval
+    final = json.loads(path.read_text())  # the restarted process's, at the end of the same run
+    assert final["session"] == last["session"] and final["state"]["position"]["done"]
+    assert final["state"]["position"]["missed"] >= lost and final["state"]["metrics"]["n"] <= n - lost
+    # the trace holds each tick once, in order: the lost ticks as ticks without an action
+    ticks = [json.loads(line)["tick"] for line in (tmp_path / "trace.jsonl").read_text().splitlines()]
+    assert ticks == list(range(n))
+    assert not list(ck_dir.glob("*.tmp"))

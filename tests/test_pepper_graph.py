@@ -273,3 +273,68 @@ def test_field_test_through_the_graph_matches_the_in_process_driver(tmp_path):
         assert got["summary"]["satisfied"] == ref.summary()["satisfied"]
     ded, sel = (x["summary"] for x in robots)
     assert ded["satisfied"] > sel["satisfied"]
+
+
+@pytest.mark.slow
+def test_the_bridge_killed_mid_session_is_restarted_and_the_session_completes(tmp_path):
+    """The bridge node holds the session's lockstep: killed with -9, the launcher restarts it; it
+    reconnects to the (stand-in) robot, restores its checkpoint (log, position) and goes on after the
+    newest interaction the robot nodes answered. Exit 0, the log, the restart and the missed ones."""
+    import os
+    import signal
+
+    from homeo_decision import checkpoint
+
+    d = fresh_domain()
+    ck_dir, logs = tmp_path / "ck", tmp_path / "logs"
+    n = 14
+    p = subprocess.Popen([sys.executable, "-c", LAUNCH, "pepper", "--standin", "--script", "field_user.json",
+                          "--interactions", str(n), "--json", "--quiet", "--data-dir", str(tmp_path),
+                          "--checkpoint-dir", str(ck_dir), "--checkpoint-every", "2", "--action-timeout", "2",
+                          "--log-dir", str(logs)],
+                         env=graph_env(d), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    out = err = ""
+    last = None
+    try:
+        path = ck_dir / "pepper_bridge.json"
+        end = time.monotonic() + 120
+        while time.monotonic() < end and p.poll() is None:
+            try:
+                last = checkpoint.load(path, "pepper_bridge")
+                if last["ticks"] >= 4:
+                    break
+            except checkpoint.CheckpointError:
+                pass
+            time.sleep(0.1)
+        assert last is not None and last["ticks"] >= 4, "the bridge never checkpointed 4 interactions"
+        pid = next(int(c) for c in os.listdir("/proc") if c.isdigit() and _is_child(int(c), p.pid, "pepper_bridge.node"))
+        os.kill(pid, signal.SIGKILL)
+        last = checkpoint.load(path, "pepper_bridge")
+        out, err = p.communicate(timeout=240)
+    finally:
+        if p.poll() is None:
+            p.kill()
+            out, err = p.communicate()
+        report = f"exit {p.returncode}\nstderr: {err[-3000:]}\n" + "\n".join(
+            f"--- {f.name}\n{f.read_text(errors='replace')[-2500:]}" for f in sorted(logs.rglob("*.log")))
+    assert p.returncode == 0, report
+    res = json.loads(out)
+    assert res["restarts"] == {"pepper_bridge": 1}, report
+    nums = [r["interaction"] for r in res["log"]]
+    assert nums == sorted(set(nums)) and nums[-1] == n, report  # each once, in order, to the end
+    lost = n - len(nums)  # the interactions after the checkpoint, before the restarted bridge went on
+    assert nums[:last["ticks"]] == list(range(1, last["ticks"] + 1)), report
+    assert res["missed"] >= lost, report
+    bridge_log = (logs / "pepper_bridge.log").read_text()
+    assert "going on with run 0 at tick" in bridge_log, report
+
+
+def _is_child(pid: int, parent: int, module: str) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            ppid = int(fh.read().rsplit(")", 1)[1].split()[1])
+        with open(f"/proc/{pid}/cmdline", "rb") as fh:
+            cmd = fh.read().split(b"\0")
+    except (OSError, IndexError, ValueError):
+        return False
+    return ppid == parent and module.encode() in cmd

@@ -2,22 +2,27 @@
 
 Publishes  homeo/drives (state), /diagnostics
 Subscribes homeo/world (state), homeo/intention (state), homeo/outcome (event)
-Parameters scenario, overrides, supervised (read-only; see ``durable``)
+Parameters scenario, overrides, and the checkpoint parameters of ``durable`` (read-only)
 
 Tick k joins the world and the recognised intention of tick k with the outcome of tick k-1
 (``homeo_msgs_py.graph``): the effects of k-1, the body of k, Eq 3.2-3.3 for the perceived world.
+
+The node carries the internal drives from tick to tick: no latched topic holds them once the node
+is gone (its own latched drives die with it), so it writes them every tick, before it answers, in
+two slots of one file (``checkpoint.SlotWriter``: tens of microseconds, no fsync). Restarted by
+the launcher within the run, it goes on from exactly the state it had after the last tick it
+answered; a resumed run starts a new episode from the scenario's initial drives, as ever.
 """
 
 from __future__ import annotations
 
 import sys
 
-from rcl_interfaces.msg import ParameterDescriptor
-
 from homeo_msgs_py.graph import NODES
-from homeo_msgs_py.rejoin import make_rejoinable
+from homeo_msgs_py.node_base import NodeConfigError
 from homeo_msgs_py.schemas import Rejected
 
+from . import checkpoint, durable
 from .hosts import PerceptionHost
 from .node_runtime import ScenarioNode, run_scenario_node
 from .scenario import ScenarioError
@@ -25,13 +30,31 @@ from .scenario import ScenarioError
 DESC = NODES["homeo_drives"]
 
 
-class DrivesNode(ScenarioNode):
+class DrivesNode(durable.CheckpointedNode, ScenarioNode):
     def __init__(self):
         super().__init__(DESC.name)
         self.host = PerceptionHost(self.sc)
-        if self.declare_fixed("supervised", False, ParameterDescriptor(
-                description="restarted nodes rejoin the run: skip a gap of ticks")):
-            make_rejoinable(self.host.stage)  # an upstream node that died must not wedge this one
+        self.durable = durable.declare(self)
+        durable.setup_stage(self, self.host.stage, self.durable)  # an upstream node that died must not wedge this one
+        self.ticks = 0  # ticks perceived in this run
+        self._answer: tuple | None = None  # (tick, fields) of the last answer
+        ck = durable.read_start(self, self.durable) if self.durable["respawned"] else None  # not on --resume
+        if ck is not None:
+            where = str(checkpoint.path_for(self.durable["resume_dir"], DESC.name))
+            try:
+                checkpoint.restore_drives(self.host, ck, where)
+            except checkpoint.CheckpointError as exc:
+                raise NodeConfigError(f"resume: {exc}") from None
+            self.ticks = ck["ticks"]
+            self._answer = (ck["state"]["tick"], ck["state"]["answer"])
+            self.get_logger().info(
+                f"rejoined from {where}: run {ck['run']}, tick {ck['state']['tick']}, learned state "
+                f"{checkpoint.digest(checkpoint.drives_learned(self.host.perception))}")
+        self.checkpoints = checkpoint.Checkpointer(
+            self.durable["checkpoint_dir"], DESC.name, 1,
+            lambda: checkpoint.drives_checkpoint(self.host.perception, max(0, self.host.stage.run), *self._answer,
+                                                 self.durable["session"]),
+            lambda text: self.get_logger().warning(text, throttle_duration_sec=5.0))
         self.pub = self.robot_publisher("drives")
         for i in DESC.inputs:
             self.subscribe(i.topic, lambda m, key=i.topic: self._put(key, m))
@@ -42,6 +65,9 @@ class DrivesNode(ScenarioNode):
         except ScenarioError as exc:  # validated fields always encode; stay up regardless
             raise Rejected(str(exc)) from None
         for k, fields in done:
+            if (k, fields) != self._answer:  # not a repeat of the last answer
+                self._answer, self.ticks = (k, fields), k + 1
+                self.checkpoints.save()  # every tick, before the answer goes out: a restart never misses it
             self.send(self.pub, k, fields, self.host.stage.run)
 
 

@@ -93,3 +93,70 @@ class CheckpointedNode:
         if self.ticks > 0 and self.checkpoints.last_ticks != self.ticks:
             self.checkpoints.save()  # at shutdown (Ctrl-C, SIGTERM, the launcher's stop)
         return super().destroy_node()
+
+
+class DurableWorld:
+    """Mixed into a world node (``self.driver``): its checkpoint every checkpoint_every ticks, at the
+    driver's step point, and at shutdown; and, in a process that replaces one that died
+    (``respawned``), the way back into the run: restore the checkpoint, wait for the robot nodes'
+    latched answers (``homeo_msgs_py.world_rejoin``), go on after the newest one. The node supplies
+    ``world_checkpoint()`` (the envelope), ``restore_world(ck)`` (returns the driver's position, or
+    raises CheckpointError) and ``go_on(run, tick, position)``."""
+
+    def setup_durable_world(self, cfg: dict) -> None:
+        from homeo_msgs_py.world_rejoin import RejoinPoint
+
+        self.durable = cfg
+        self.checkpoints = checkpoint.Checkpointer(cfg["checkpoint_dir"], self.get_name(), cfg["checkpoint_every"],
+                                                   self.world_checkpoint,
+                                                   lambda text: self.get_logger().warning(text))
+        self.driver.on_step = self.checkpoints.after_tick
+        self._rejoin = self._rejoin_since = None
+        self._rejoin_pos = None
+        if not cfg["respawned"]:
+            return
+        ck = read_start(self, cfg)
+        if ck is not None:
+            where = str(checkpoint.path_for(cfg["resume_dir"], self.get_name()))
+            try:
+                self._rejoin_pos = self.restore_world(ck)
+            except checkpoint.CheckpointError as exc:
+                raise NodeConfigError(f"resume: {exc}") from None
+            self.get_logger().info(f"restored {where}: run {ck['run']}, tick {ck['ticks']}")
+        pos = self._rejoin_pos
+        self._rejoin = RejoinPoint(pos["run"] if pos else None, pos["tick"] if pos else 0)
+        self._rejoin_subs = [self.subscribe(k, lambda m, k=k: self._rejoin.put(k, m)) for k in ("intention", "drives")]
+
+    def rejoin_due(self) -> bool:
+        """Called once the start gate is open: True when the rejoin was made (the driver goes on)."""
+        from homeo_msgs_py.world_rejoin import WAIT_S
+
+        import time
+
+        if self._rejoin is None:
+            return False
+        now = time.monotonic()
+        if self._rejoin_since is None:
+            self._rejoin_since = now
+        if not self._rejoin.complete and now - self._rejoin_since < WAIT_S:
+            return True  # still listening for the robot's latched answers
+        point, self._rejoin = self._rejoin, None
+        for sub in self._rejoin_subs:
+            self.destroy_subscription(sub)  # heard once; not a reader of the run's ticks
+        self._rejoin_subs = []
+        run, tick = point.where(self.driver.iterations)
+        self.get_logger().info(f"the robot nodes answered {point.heard or 'nothing'}: going on with run {run} at "
+                               f"tick {tick}")
+        self.go_on(run, tick, self._rejoin_pos)
+        return True
+
+    def extra_statuses(self) -> list[dict]:
+        return [status(self.get_name(), self.checkpoints, self.driver.tick, 0)]
+
+    def save_final(self) -> None:
+        """At shutdown: a run that started leaves its last checkpoint (a node that is still waiting
+        to rejoin keeps the one it was given)."""
+        from homeo_msgs_py.lockstep import WAITING
+
+        if self.driver.state != WAITING and self._rejoin is None:
+            self.checkpoints.save()

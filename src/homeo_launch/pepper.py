@@ -284,7 +284,7 @@ def run_pepper_graph(specs: list[NodeSpec], log_dir: Path, standin: StandinProce
         _wait_up(graph, mon, standin, endpoints(intention), discovery_timeout, sup)
         while True:
             mon.spin(0.05)
-            sup.check()  # robot nodes are restarted from their checkpoints; the bridge's death is fatal
+            sup.check()  # nodes are restarted from their checkpoints; a restarted bridge goes on with the run
             _check_standin(standin)
             st = mon.status
             if st is None:
@@ -293,10 +293,12 @@ def run_pepper_graph(specs: list[NodeSpec], log_dir: Path, standin: StandinProce
                 last.clear()
                 last.update(st.fields)
             rows = (st.fields.get("extra") or {}).get("log") or []
-            if on_row is not None:
-                for r in rows[shown:]:
-                    on_row(r)
-            shown = max(shown, len(rows))
+            for r in rows:  # by number: a restarted bridge's log goes on from its checkpoint
+                k = r.get("interaction") if isinstance(r, dict) else None
+                if type(k) is int and k > shown:
+                    shown = k
+                    if on_row is not None:
+                        on_row(r)
             if sup.restarts and last is not None:
                 last["restarts"] = dict(sup.restarts)
             if st.fields["done"]:

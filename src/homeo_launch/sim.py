@@ -12,7 +12,8 @@
 are discovered and matched, shows progress, and prints the metrics of ``homeo-sim run``
 (the same JSON with ``--json``). Ctrl-C stops every node after saving what was asked (``--save-q``,
 the nodes' final checkpoints). A robot node that dies is restarted from its checkpoint
-(``supervise.py``); the world node's death, or too many, stops the rest with its name.
+and so is the world node, which goes on with the run (``supervise.py``); too many deaths of one
+node stop the rest with its name.
 """
 
 from __future__ import annotations
@@ -97,14 +98,14 @@ def durable_params(o, params: dict) -> None:
     for n in ("homeo_intention", "homeo_drives", "homeo_decision"):
         if n in params and o.max_restarts > 0:
             params[n]["supervised"] = True
-    for n in ("homeo_intention", "homeo_decision"):
+    for n in ("homeo_sim", "pepper_bridge", "homeo_intention", "homeo_drives", "homeo_decision"):
         if n not in params:
             continue
         p = params[n]
         if o.checkpoint_dir:
             p.update(checkpoint_dir=os.path.abspath(o.checkpoint_dir), checkpoint_every=int(o.checkpoint_every),
                      session=o.session)
-        if o.resume:
+        if o.resume and n in ("homeo_intention", "homeo_decision"):  # the learned state; a world starts a new run
             p["resume_dir"] = os.path.abspath(o.resume)
 
 
@@ -144,7 +145,7 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
         last_tick = -1
         while True:
             mon.spin(0.05)
-            sup.check()  # a robot node that died is restarted (bounded), the world node's death is fatal
+            sup.check()  # a node that died is restarted (bounded); the world node goes on with the run
             st = mon.status
             if st is None:
                 continue
@@ -380,6 +381,7 @@ def cmd_sim(a) -> int:
     restarts = status.get("restarts")
     if restarts:  # only when there were any: an undisturbed run prints what homeo-sim run prints
         out["restarts"] = restarts
+        out["missed"] = status.get("missed", 0)  # the ticks the restarts cost
     if a.json:
         print(json.dumps(json_safe(out)))
     else:

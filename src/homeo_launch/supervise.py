@@ -1,8 +1,10 @@
-"""Supervision of a running graph, as ROS launch's ``respawn``: a robot node that dies is started
-again after a back-off and reloads its last checkpoint (``homeo_decision.durable``: parameters
-``respawned`` and ``resume_dir``); the world node's lockstep counts the ticks it missed meanwhile.
-A node that dies more than ``max_restarts`` times, or the world node (it holds the run), stops the
-graph with one line naming it. Restarts are reported on ``/diagnostics`` and in the run's output.
+"""Supervision of a running graph, as ROS launch's ``respawn``: a node that dies is started again
+after a back-off and reloads its last checkpoint (``homeo_decision.durable``: parameters
+``respawned`` and ``resume_dir``). A robot node rejoins the ticks; the world node's lockstep counts
+the ticks it missed meanwhile. A restarted world node goes on with the same run after the newest
+tick the robot nodes answered (``homeo_msgs_py.world_rejoin``); the ticks since its checkpoint are
+counted as missed. A node that dies more than ``max_restarts`` times stops the graph with one line
+naming it. Restarts are reported on ``/diagnostics`` and in the run's output.
 """
 
 from __future__ import annotations
@@ -40,11 +42,11 @@ class Supervisor:
             self._diag_at = 0.0
 
     def respawnable(self, name: str) -> bool:
-        return self.max_restarts > 0 and NODES[name].role != "world"
+        return self.max_restarts > 0 and name in NODES
 
     def check(self) -> None:
-        """Call often: restart dead robot nodes when their back-off is over; raise GraphError for a
-        node that may not be restarted."""
+        """Call often: restart dead nodes when their back-off is over; raise GraphError for a node that
+        may not be restarted."""
         now = self.clock()
         g = self.graph
         for name, p in list(g.procs.items()):

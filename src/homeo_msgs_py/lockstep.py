@@ -144,6 +144,8 @@ class LockstepDriver:
         self.run_async, self.log, self.clock = run_async, log or (lambda text: None), clock
         self.run = 0
         self.on_done: Callable[[], None] | None = None  # called once the run is done
+        # called with tick k before k is stepped, its record of k-1 taken: the world's checkpoint point
+        self.on_step: Callable[[int], None] | None = None
         self._reset_run()
 
     def _reset_run(self) -> None:
@@ -307,6 +309,8 @@ class LockstepDriver:
     def _step(self, action_fields: dict | None) -> None:
         if self.tick > 0:
             self.side.record(self._last_fields)  # the drives after tick k-1 came with this tick's action
+        if self.on_step is not None:
+            self.on_step(self.tick)
         self.phase = "step"
         self._submit("step", self.side.step, action_fields)
 
@@ -317,6 +321,35 @@ class LockstepDriver:
         self.log(f"run {self.run} done: {self.tick} ticks, {self.missed} missed")
         if self.on_done is not None:
             self.on_done()
+
+    # -- a restarted world node ---------------------------------------------------------------
+    def position(self) -> dict:
+        """Where the run stands, as JSON-able data (the world's checkpoint): ``outcome`` is the last
+        one sent, ``[tick, fields]``, which a restart at the next tick sends again."""
+        running = self.state in (RUNNING, FINISHING)
+        return {"run": self.run, "tick": self.tick, "missed": self.missed, "iterations": self.iterations,
+                "done": self.state == DONE, "started": self.state != WAITING,
+                "elapsed": self.clock() - self._t_begin if running else self.elapsed,
+                "outcome": list(self._outcome) if self._outcome is not None else None}
+
+    def rejoin(self, run: int, tick: int, missed: int, elapsed: float = 0.0, outcome: tuple | None = None,
+               done: bool = False) -> None:
+        """Go on with run ``run`` at tick ``tick`` (a world node restarted mid-run; ``missed`` counts
+        the ticks lost meanwhile). The outcome of ``tick - 1`` goes out first: the robot nodes join
+        it into ``tick``. No ``start``: the run started long ago."""
+        self._reset_run()
+        self.run, self.tick, self.missed = run, tick, missed
+        now = self.clock()
+        self._t_begin, self._t0, self._t0_tick = now - elapsed, now, tick
+        if done:
+            self.state, self.elapsed = DONE, elapsed
+            return
+        self.state = FINISHING if self.iterations and tick >= self.iterations else RUNNING
+        self.log(f"run {run}: rejoined at tick {tick}, {missed} missed")
+        if outcome is not None:
+            self._outcome = (outcome[0], outcome[1])
+            self.send("outcome", outcome[0], outcome[1], self.run)
+        self._observe()
 
     @property
     def last_action(self) -> dict | None:
@@ -353,6 +386,12 @@ class JoinedStage:
     @property
     def run(self) -> int:
         return self.join.run
+
+    def resume_after(self, run: int, tick: int, fields: dict) -> None:
+        """A restarted node goes on after ``tick`` of ``run``, whose answer was ``fields`` (its
+        checkpoint): an input of that tick again is answered with them."""
+        self.join.restart(run, at=tick + 1)
+        self._last = (run, tick, fields)
 
     def put(self, key: str, msg: Message) -> list[tuple[int, dict]]:
         """Take one input (raises Rejected); returns ``(tick, fields to publish)`` per completed tick."""

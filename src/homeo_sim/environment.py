@@ -9,7 +9,7 @@ the simulation node both drive this object.
 from __future__ import annotations
 
 from homeo_decision.environment import Observation, Outcome
-from homeo_decision.scenario import Scenario
+from homeo_decision.scenario import OBS_CHANNELS, Scenario
 
 from .body import SimBody
 from .human import SimHuman
@@ -65,6 +65,49 @@ class SimEnvironment:
         if hasattr(self.human, "start"):
             self.human.start()
             self._advance_human()
+
+    def state(self) -> dict:
+        """World, body, human (and its streams) and the cues of the current observation, as JSON-able
+        data (a checkpoint); ``set_state`` goes on from it exactly."""
+        st = {"tick": self.tick, "world": self.world.code, "body": list(self.body.values), "human": self.human.state(),
+              "cues": dict(self._obs.cues) if self._obs.cues is not None else None}
+        if hasattr(self.human, "live"):  # a person: whether the run had started
+            st["live"] = self.human.live
+        return st
+
+    def set_state(self, st) -> None:
+        """Go on from ``state()``; raises ValueError (one line) for anything else, changing nothing."""
+        sc = self.sc
+        if not isinstance(st, dict):
+            raise ValueError("not an environment state")
+        tick, code, body = st.get("tick"), st.get("world"), st.get("body")
+        if type(tick) is not int or tick < 0:
+            raise ValueError(f"environment tick must be an integer >= 0, got {tick!r}")
+        if type(code) is not int or not 0 <= code < sc.n_codes:
+            raise ValueError(f"world code must be in 0..{sc.n_codes - 1}, got {code!r}")
+        if not isinstance(body, list) or len(body) != len(sc.drives) or not all(
+                type(x) in (int, float) and 0.0 <= x <= 100.0 for x in body):
+            raise ValueError(f"body must be {len(sc.drives)} numbers in 0..100")
+        cues = st.get("cues")
+        if self.cues:
+            alpha = sc.observations.alphabets
+            if not isinstance(cues, dict) or set(cues) != set(OBS_CHANNELS) or not all(
+                    isinstance(v, str) and v in alpha[ch] for ch, v in cues.items()):
+                raise ValueError("cues must name one symbol of each channel's alphabet")
+        elif cues is not None:
+            raise ValueError("cues in the state of an environment that draws none")
+        person = hasattr(self.human, "live")
+        live = st.get("live", False)
+        if type(live) is not bool or (live and not person):
+            raise ValueError("live must be true or false, and only for a person")
+        self.human.set_state(st.get("human"))  # checks everything before it changes anything
+        if person:
+            self.human.live, self.human._first = live, False
+        self.world.code = code
+        self.body.values[:] = [float(x) for x in body]  # in place: the observation holds this list
+        self.tick = tick
+        o = self._obs
+        o.code, o.intention, o.cues = self._unseen[code], self.human.intention, dict(cues) if cues is not None else None
 
     def observe(self) -> Observation:
         """What the robot can sense now. The record is the environment's own, updated in place by

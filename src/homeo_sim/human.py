@@ -47,6 +47,27 @@ class SimHuman:
         self.present = True
         self.satisfied = False
 
+    def state(self) -> dict:
+        """What the human is and where its two streams stand, as JSON-able data (a checkpoint)."""
+        return {"seed": self.seed, "intention": self.intention, "present": self.present, "satisfied": self.satisfied,
+                "rng": self.rng.state(), "obs_rng": self.obs_rng.state()}
+
+    def set_state(self, st) -> None:
+        """Go on from ``state()``: the same draws follow as had it never stopped. Raises ValueError
+        (one line) for anything else, changing nothing."""
+        if not isinstance(st, dict):
+            raise ValueError("not a human state")
+        seed, it = st.get("seed"), st.get("intention")
+        if type(seed) is not int or not 0 <= seed <= 2**31 - 1:
+            raise ValueError(f"human seed must be an integer in 0..2^31-1, got {seed!r}")
+        if type(it) is not int or not 0 <= it < len(self.sc.intention_names):
+            raise ValueError(f"human intention must be an index of the scenario's intentions, got {it!r}")
+        if type(st.get("present")) is not bool or type(st.get("satisfied")) is not bool:
+            raise ValueError("human present and satisfied must be true or false")
+        rng, obs = stream_from(seed, "human", st.get("rng")), stream_from(seed, "observation", st.get("obs_rng"))
+        self.seed, self.intention, self.present, self.satisfied = seed, it, st["present"], st["satisfied"]
+        self.rng, self.obs_rng = rng, obs
+
     def advance(self, code: int) -> None:
         """Lines 3-6 (and presence): decide what the human wants in the world ``code``."""
         u = self.rng.random()
@@ -113,6 +134,18 @@ class SimHuman:
         if with_intention:
             out["intention"] = self.sc.intention_names[it]
         return out
+
+
+def stream_from(seed: int, component: str, st) -> UniformStream:
+    """A component's stream continued from its saved state; ValueError (one line) for a bad one."""
+    if not isinstance(st, dict) or type(st.get("block")) is not int or type(st.get("drawn")) is not int:
+        raise ValueError(f"{component} stream: not a random-stream state")
+    s = UniformStream(seed, component)
+    try:
+        s.set_state(st)
+    except (KeyError, TypeError, ValueError, OverflowError) as exc:  # numpy's own checks of the generator
+        raise ValueError(f"{component} stream: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}") from None
+    return s
 
 
 def _habit_tables(sc: Scenario):

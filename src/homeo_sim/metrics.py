@@ -6,6 +6,7 @@ human expressed an intention, and whether the robot's action satisfied it.
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from typing import Sequence
 
@@ -91,6 +92,33 @@ class MetricRecorder:
     def series(self) -> dict:
         return cumulative_series(*self.arrays(), self.drive_names, self.thresholds)
 
+    def state(self) -> dict:
+        """The running sums as JSON-able data (a checkpoint); floats round-trip exactly through JSON."""
+        return {"n": self._n, "intentions": self._n_int, "satisfied": self._n_sat, "secure": self._n_secure,
+                "sum": list(self._sum), "excess": list(self._excess)}
+
+    def set_state(self, st) -> None:
+        """Go on from ``state()``; raises ValueError (one line) for anything else, changing nothing."""
+        if self._keep:
+            raise ValueError("a recorder that keeps every tick cannot take a running-sums state")
+        if not isinstance(st, dict):
+            raise ValueError("not a metrics state")
+        counts = [st.get(k) for k in ("n", "intentions", "satisfied", "secure")]
+        if not all(type(c) is int and c >= 0 for c in counts):
+            raise ValueError("metric counts must be integers >= 0")
+        n, n_int, n_sat, n_sec = counts
+        if n_int > n or n_sat > n_int or n_sec > n:
+            raise ValueError(f"inconsistent metric counts {counts}")
+        sums = []
+        for key in ("sum", "excess"):
+            v = st.get(key)
+            if not isinstance(v, list) or len(v) != len(self.drive_names) or not all(
+                    type(x) in (int, float) and math.isfinite(x) and x >= 0.0 for x in v):
+                raise ValueError(f"metric {key} must be {len(self.drive_names)} finite numbers >= 0")
+            sums.append([float(x) for x in v])
+        self._n, self._n_int, self._n_sat, self._n_secure = counts
+        self._sum, self._excess = sums
+
 
 def summarize(drives: np.ndarray, expressed: np.ndarray, satisfied: np.ndarray, names, thresholds) -> dict:
     """The four metrics at the end of a run, per drive and 'all'."""
@@ -166,6 +194,23 @@ class AccuracyEnds:
 
     def __len__(self) -> int:
         return len(self.last)
+
+    def state(self) -> dict:
+        bits = lambda xs: "".join("1" if x else "0" for x in xs)  # noqa: E731
+        return {"window": self.window, "first": bits(self.first), "last": bits(self.last)}
+
+    def set_state(self, st) -> None:
+        """Go on from ``state()``; raises ValueError (one line) for anything else, changing nothing."""
+        if not isinstance(st, dict) or st.get("window") != self.window:
+            raise ValueError(f"not an accuracy state of window {self.window}")
+        first, last = st.get("first"), st.get("last")
+        for v in (first, last):
+            if not isinstance(v, str) or len(v) > self.window or v.strip("01"):
+                raise ValueError(f"accuracy hits must be strings of 0 and 1, at most {self.window} long")
+        if len(last) < len(first):
+            raise ValueError("accuracy hits: fewer last than first")
+        self.first = [c == "1" for c in first]
+        self.last = deque((c == "1" for c in last), maxlen=self.window)
 
     def ends(self) -> dict:
         if not self.last:

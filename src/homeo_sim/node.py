@@ -23,6 +23,7 @@ import time
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
 from std_srvs.srv import Trigger
 
+from homeo_decision import durable
 from homeo_decision.node_runtime import ScenarioNode, run_scenario_node
 from homeo_msgs_py.graph import NODES, SEED_MAX, TICKS_MAX, TOPICS, readers
 from homeo_msgs_py.lockstep import DONE, RUNNING, WAITING, LockstepDriver
@@ -37,7 +38,7 @@ SIM_HUMAN, PERSON = "sim", "person"
 POLL_S = 0.02
 
 
-class SimNode(ScenarioNode):
+class SimNode(durable.DurableWorld, ScenarioNode):
     def __init__(self):
         super().__init__(DESC.name)
         d = ParameterDescriptor
@@ -64,14 +65,17 @@ class SimNode(ScenarioNode):
             floating_point_range=[FloatingPointRange(from_value=0.01, to_value=3600.0)]))
         p = self.get_parameter
         self.learning = p("intention_accuracy").value
+        cfg = durable.declare(self)  # checkpoints; a respawned node goes on with the run (durable.DurableWorld)
         human, run_async, self._pool = self._human(p("human").value, p("seed").value)
-        self.side = SimWorldSide(self.sc, p("seed").value, self.learning, self._open_trace(p("trace_path").value),
-                                 human=human)
+        # a respawned node's trace goes on where its checkpoint left it (restore_world cuts it there)
+        self.side = SimWorldSide(self.sc, p("seed").value, self.learning,
+                                 self._open_trace(p("trace_path").value, keep=cfg["respawned"]), human=human)
         self.pubs = {key: self.publisher(key) for key in DESC.publishes}
         self.driver = LockstepDriver(self.side, self._send, iterations=p("iterations").value, rate=p("rate").value,
                                      timeout=p("action_timeout").value, log=self._log, note=self.rejects.note,
                                      run_async=run_async)
         self.driver.on_done = self._publish_status
+        self.setup_durable_world(cfg)
         self.add_on_set_parameters_callback(self._on_params)
         self.subscribe("action", self.driver.on_action)
         self.create_service(Trigger, "~/reset", self._on_reset)
@@ -138,7 +142,7 @@ class SimNode(ScenarioNode):
                 drv.iterations = prm.value
         return SetParametersResult(successful=True)  # seed and trace_path take effect at the next ~/reset
 
-    def _open_trace(self, path: str):
+    def _open_trace(self, path: str, keep: bool = False):
         try:
             path = self.data_path(path, "trace_path")
         except OutsideDataDir as exc:
@@ -146,6 +150,10 @@ class SimNode(ScenarioNode):
         if not path:
             return None
         try:
+            if keep:
+                fh = open(path, "a+")  # created if missing, never truncated here
+                fh.seek(0, 2)
+                return fh
             return open(path, "w")
         except OSError as exc:
             raise NodeConfigError(f"trace_path {path}: {exc.strerror}") from None
@@ -163,7 +171,8 @@ class SimNode(ScenarioNode):
         if drv.state == WAITING:
             missing = self._missing()
             if not missing:
-                drv.begin()
+                if not self.rejoin_due():
+                    drv.begin()
             elif time.monotonic() - self._wait_logged > 2.0:
                 self._wait_logged = time.monotonic()
                 self.get_logger().info("waiting for the graph: " + "; ".join(missing))
@@ -189,11 +198,69 @@ class SimNode(ScenarioNode):
             return response
         side.reset(seed)
         self.driver.restart()
+        self.checkpoints.save()  # a restart from here goes on with the new run, not the old one
         response.success = True
         response.message = f"run {self.driver.run} starts from tick 0 with seed {seed}"
         return response
 
+    # -- checkpoints and the rejoin of a respawned node (durable.DurableWorld) --------------------
+    def _run_config(self) -> dict:
+        from .checkpoint import run_config
+
+        p = lambda n: self.get_parameter(n).value  # noqa: E731
+        trace = self.side.trace
+        if trace is not None:
+            trace.flush()  # the checkpoint says how much of the trace belongs to the run so far
+        return run_config(self.sc, seed=self.side.env.seed, iterations=self.driver.iterations, rate=self.driver.rate,
+                          action_timeout=self.driver.timeout, intention_accuracy=self.learning, human=p("human"),
+                          trace_bytes=trace.tell() if trace is not None else None)
+
+    def world_checkpoint(self) -> dict:
+        from .checkpoint import world_checkpoint
+
+        return world_checkpoint(self.side, self.driver.position(), self._run_config(), self.durable["session"])
+
+    def restore_world(self, ck: dict) -> dict:
+        from .checkpoint import restore_world
+
+        where = str(durable.checkpoint.path_for(self.durable["resume_dir"], DESC.name))
+        cfg, pos = restore_world(self.side, ck, self._run_config(), where)
+        drv = self.driver
+        drv.iterations, drv.rate, drv.timeout = cfg["iterations"], cfg["rate"], cfg["action_timeout"]
+        trace = self.side.trace
+        if trace is not None and cfg["trace_bytes"] is not None and cfg["trace_bytes"] <= trace.tell():
+            trace.truncate(cfg["trace_bytes"])  # the ticks after the checkpoint are written again, as they now go
+            trace.seek(cfg["trace_bytes"])
+        return pos
+
+    def go_on(self, run: int, tick: int, pos: dict | None) -> None:
+        drv = self.driver
+        floor = pos["tick"] if pos else 0
+        if pos is None or run != pos["run"]:  # no checkpoint (of this run): the run's world from its start
+            self.side.reset(self.side.env.seed)
+            pos = {"run": run, "tick": 0, "missed": 0, "elapsed": 0.0, "outcome": None, "done": False,
+                   "started": False}
+            floor = 0
+            if self.side.trace is not None:
+                self.side.trace.truncate(0)  # the world starts over: so does its trace
+        if pos["done"]:
+            drv.rejoin(run, pos["tick"], pos["missed"], pos["elapsed"], done=True)
+            self._publish_status()
+            return
+        if tick == 0 and not pos["started"]:
+            drv.run = run
+            drv.begin()
+            return
+        lost = tick - floor
+        outcome = (tick - 1, self.side.skip(lost)) if lost else pos["outcome"]
+        if lost:
+            self.rejects.note("missed ticks", lost)
+            self.get_logger().warning(f"ticks {floor}..{tick - 1} were lost with the process that died: counted as "
+                                      "missed")
+        drv.rejoin(run, tick, pos["missed"] + lost, pos["elapsed"], outcome)
+
     def destroy_node(self):
+        self.save_final()
         if self._pool is not None:
             self.side.env.human.inbox.put(None)  # a wait in progress ends now (as silence)
             self._pool.shutdown(wait=False, cancel_futures=True)

@@ -71,6 +71,26 @@ class SimWorldSide:
             return
         d = action_fields[self.drives_key]
         self.rec.record([d[n] for n in self.sc.drive_names], self._last.true_intention != 0, self._last.satisfied)
+        self._last = None  # recorded: a checkpoint from here on must not record it again
+
+    # -- a restarted node ------------------------------------------------------------------------
+    @property
+    def pending_truth(self) -> list | None:
+        """The truth of the last tick stepped but not yet recorded (its drives come with the next action)."""
+        o = self._last
+        return None if o is None else [o.true_intention != 0, bool(o.satisfied)]
+
+    def set_pending_truth(self, truth: list | None) -> None:
+        self._last = None if truth is None else Outcome(None, 0, None, None, None, int(truth[0]), bool(truth[1]))
+
+    def skip(self, ticks: int) -> dict:
+        """Step ``ticks`` ticks without an action (a world node down: time passed, nobody acted);
+        the outcome fields of the last. Nothing of them is recorded: no robot drives came back."""
+        fields = {}
+        for _ in range(ticks):
+            fields = self.step(None)
+        self._last = None
+        return fields
 
     def status(self, done: bool) -> dict:
         if not self.rec.n:

@@ -37,6 +37,7 @@ from concurrent.futures import ThreadPoolExecutor
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
 from std_msgs.msg import String
 
+from homeo_decision import durable
 from homeo_decision.node_runtime import ScenarioNode, run_scenario_node
 from homeo_msgs_py import graph as G
 from homeo_msgs_py.diagnostics import ERROR, OK, WARN
@@ -59,7 +60,7 @@ def _int(lo, hi, text, read_only=False):
                                integer_range=[IntegerRange(from_value=lo, to_value=hi, step=1)])
 
 
-class BridgeNode(ScenarioNode):
+class BridgeNode(durable.DurableWorld, ScenarioNode):
     def __init__(self):
         super().__init__(DESC.name)
         import qi
@@ -106,6 +107,7 @@ class BridgeNode(ScenarioNode):
         self.declare_fixed("connect_timeout", 5.0, _float(0.1, 600.0, "seconds per connection attempt"))
         self.declare_fixed("backoff_max", 10.0, _float(0.1, 600.0, "longest pause between reconnection attempts"))
         p = lambda n: self.get_parameter(n).value  # noqa: E731
+        cfg_durable = durable.declare(self)  # checkpoints; a respawned bridge goes on with the run
         if p("battery_source") not in ("memory", "albattery"):
             raise NodeConfigError(f"parameter battery_source: {p('battery_source')!r} is not memory or albattery")
         try:
@@ -142,6 +144,7 @@ class BridgeNode(ScenarioNode):
                                      timeout=p("action_timeout"), run_async=self.worker.submit, log=self._log,
                                      note=self.rejects.note)
         self.driver.on_done = self._publish_status
+        self.setup_durable_world(cfg_durable)
         self.link = self.bridge.status()
         self.add_on_set_parameters_callback(self._on_params)
         self.subscribe("action", self.driver.on_action)
@@ -208,7 +211,8 @@ class BridgeNode(ScenarioNode):
         if drv.state == WAITING:
             missing = self._missing()
             if not missing:
-                drv.begin()  # the user's first expression, on the worker thread
+                if not self.rejoin_due():
+                    drv.begin()  # the user's first expression, on the worker thread
             elif time.monotonic() - self._logged > 2.0:
                 self._logged = time.monotonic()
                 self.get_logger().info("waiting: " + "; ".join(missing))
@@ -265,7 +269,7 @@ class BridgeNode(ScenarioNode):
         self._send("run_status", drv.tick, fields, drv.run)
 
     def extra_statuses(self) -> list[dict]:
-        return [self.robot_status()]
+        return [self.robot_status(), *durable.DurableWorld.extra_statuses(self)]  # and its checkpoints
 
     def robot_status(self) -> dict:
         """The link and the bridge's diagnostics snapshot as one DiagnosticStatus (plain dict)."""
@@ -295,7 +299,49 @@ class BridgeNode(ScenarioNode):
         return {"name": "pepper_bridge: robot", "hardware_id": str(link.get("url")), "level": level, "message": msg,
                 "values": values}
 
+    # -- checkpoints and the rejoin of a respawned bridge (durable.DurableWorld) -------------------
+    def world_checkpoint(self) -> dict:
+        from .checkpoint import bridge_checkpoint, run_config
+
+        return bridge_checkpoint(self.side, self.driver.position(), run_config(self.sc, self.driver.iterations),
+                                 self.durable["session"])
+
+    def restore_world(self, ck: dict) -> dict:
+        from .checkpoint import restore_bridge, run_config
+
+        where = str(durable.checkpoint.path_for(self.durable["resume_dir"], DESC.name))
+        cfg, pos = restore_bridge(self.side, ck, run_config(self.sc, self.driver.iterations), where)
+        self.driver.iterations = cfg["interactions"]
+        return pos
+
+    def go_on(self, run: int, tick: int, pos: dict | None) -> None:
+        from homeo_decision import codec
+        from homeo_decision.environment import Outcome
+
+        drv = self.driver
+        if pos is None or run != pos["run"]:  # no checkpoint of this run: its log starts here
+            pos = {"run": run, "tick": 0, "missed": 0, "elapsed": 0.0, "outcome": None, "done": False,
+                   "started": False}
+        if pos["done"]:
+            drv.rejoin(run, pos["tick"], pos["missed"], pos["elapsed"], done=True)
+            self._publish_status()
+            return
+        if tick == 0 and not pos["started"]:
+            drv.run = run
+            drv.begin()
+            return
+        lost = tick - pos["tick"]
+        outcome = pos["outcome"]
+        if lost:  # the robot went on meanwhile; the bridge saw none of it
+            outcome = (tick - 1, codec.outcome_fields(self.sc, Outcome(None, 0, None, None, None)))
+            self.rejects.note("missed ticks", lost)
+            self.get_logger().warning(f"interactions {pos['tick'] + 1}..{tick} were lost with the process that died: "
+                                      "counted as missed")
+        self.env.tick = tick  # the interactions go on being numbered from here
+        drv.rejoin(run, tick, pos["missed"] + lost, pos["elapsed"], outcome)
+
     def destroy_node(self):
+        self.save_final()
         try:
             self.bridge.stop()
         finally:
