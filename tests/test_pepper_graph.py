@@ -338,3 +338,31 @@ def _is_child(pid: int, parent: int, module: str) -> bool:
     except (OSError, IndexError, ValueError):
         return False
     return ppid == parent and module.encode() in cmd
+
+
+def test_pepper_resume_goes_on_with_the_robot_nodes_learning(tmp_path):
+    """``pepper --resume DIR``: a second session on the stand-in starts its robot nodes from the first
+    session's final checkpoints: the decision node's schedule goes on from the interactions it has
+    learned (tick offset), and its Q-table and the intention model are those it had (digests)."""
+    from homeo_decision import checkpoint
+
+    d = fresh_domain()
+    ck = tmp_path / "ck"
+    common = ["pepper", "--standin", "--script", "field_user.json", "--json", "--quiet", "--data-dir", str(tmp_path),
+              "--checkpoint-dir", str(ck), "--intention", "bayes"]
+    r = subprocess.run([sys.executable, "-c", LAUNCH, *common, "--interactions", "3"], env=graph_env(d),
+                       capture_output=True, text=True, timeout=240)
+    assert r.returncode == 0, r.stderr[-3000:]
+    first = checkpoint.load(ck / "homeo_decision.json", "homeo_decision")
+    assert first["ticks"] >= 3 and first["tick_offset"] == 0, first["ticks"]
+    first_model = checkpoint.load(ck / "homeo_intention.json", "homeo_intention")
+    r = subprocess.run([sys.executable, "-c", LAUNCH, *common, "--interactions", "2", "--resume", str(ck)],
+                       env=graph_env(d), capture_output=True, text=True, timeout=240)
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert len(json.loads(r.stdout)["log"]) == 2
+    after = checkpoint.load(ck / "homeo_decision.json", "homeo_decision")
+    assert after["tick_offset"] == first["ticks"], (after["tick_offset"], first["ticks"])  # the schedule went on
+    assert after["ticks"] > first["ticks"]
+    assert after["session"] != first["session"]
+    model = checkpoint.load(ck / "homeo_intention.json", "homeo_intention")
+    assert model["ticks"] > first_model["ticks"]  # the model learned on from where it was
