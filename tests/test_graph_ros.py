@@ -266,9 +266,10 @@ def test_ctrl_c_stops_every_process_within_5_s_with_no_orphans():
 
 
 def test_a_dead_node_is_named_and_the_rest_are_stopped():
-    # the world node: it holds the run, so it is not restarted (robot nodes are: test_durable_graph.py)
+    # without supervision (--max-restarts 0) a node that dies stops the graph; restarts of every node
+    # are tested in test_durable_graph.py
     d = fresh_domain()
-    la = _start_launcher(d)
+    la = _start_launcher(d, "--max-restarts", "0")
     try:
         _wait_running(d)
         kids = _children(la.pid)
