@@ -81,6 +81,11 @@ def check_envelope(raw, node: str, where: str) -> dict:
 
 
 # -- the world nodes' parts (homeo_sim.checkpoint, pepper_bridge.checkpoint) ----------------------------
+def scenario_print(sc) -> str:
+    """The scenario a world checkpoint was written under: a restart must run the same one."""
+    return digest({"raw": sc.raw, "open": sc.open})
+
+
 def check_int(v, what: str, lo: int = 0, hi: int = 2**62) -> int:
     if type(v) is not int or not lo <= v <= hi:
         raise CheckpointError(f"{what} must be an integer in {lo}..{hi}, got {str(v)[:40]!r}")

@@ -16,16 +16,13 @@ it changes anything, and a checkpoint of another scenario, human or recognition 
 
 from __future__ import annotations
 
-from homeo_decision.checkpoint import CheckpointError, check_int as _int, check_number as _num, digest, envelope
+from homeo_decision.checkpoint import CheckpointError, check_int as _int, check_number as _num, envelope
 from homeo_decision.checkpoint import check_world_position as check_position
+from homeo_decision.checkpoint import scenario_print
 from homeo_decision.codec import vocabulary
 
 NODE = "homeo_sim"
 CONFIG_CHECKED = ("scenario", "human", "intention_accuracy")  # a restart must be the same kind of run
-
-
-def scenario_print(sc) -> str:
-    return digest({"raw": sc.raw, "open": sc.open})
 
 
 def run_config(sc, *, seed: int, iterations: int, rate: float, action_timeout: float, intention_accuracy: bool,

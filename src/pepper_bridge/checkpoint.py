@@ -8,9 +8,8 @@ these and goes on after the newest tick the robot nodes answered (``homeo_msgs_p
 
 from __future__ import annotations
 
-from homeo_decision.checkpoint import CheckpointError, check_int, check_world_position, envelope
+from homeo_decision.checkpoint import CheckpointError, check_int, check_world_position, envelope, scenario_print
 from homeo_decision.codec import vocabulary
-from homeo_sim.checkpoint import scenario_print
 
 from .environment import MAX_LOG_ROWS
 
