@@ -101,7 +101,12 @@ class DurableWorld:
     (``respawned``), the way back into the run: restore the checkpoint, wait for the robot nodes'
     latched answers (``homeo_msgs_py.world_rejoin``), go on after the newest one. The node supplies
     ``world_checkpoint()`` (the envelope), ``restore_world(ck)`` (returns the driver's position, or
-    raises CheckpointError) and ``go_on(run, tick, position)``."""
+    raises CheckpointError), ``go_on(run, tick, position, lost)`` (the driver rejoins at ``tick``;
+    ``lost`` ticks since the position were never seen) and may supply ``fresh_run()`` (no checkpoint
+    of the run the robot is in)."""
+
+    def fresh_run(self) -> None:
+        pass
 
     def setup_durable_world(self, cfg: dict) -> None:
         from homeo_msgs_py.world_rejoin import RejoinPoint
@@ -147,8 +152,27 @@ class DurableWorld:
         run, tick = point.where(self.driver.iterations)
         self.get_logger().info(f"the robot nodes answered {point.heard or 'nothing'}: going on with run {run} at "
                                f"tick {tick}")
-        self.go_on(run, tick, self._rejoin_pos)
+        self._go_on(run, tick, self._rejoin_pos)
         return True
+
+    def _go_on(self, run: int, tick: int, pos: dict | None) -> None:
+        drv = self.driver
+        if pos is None or run != pos["run"]:
+            self.fresh_run()
+            pos = {"run": run, "tick": 0, "missed": 0, "elapsed": 0.0, "outcome": None, "done": False,
+                   "started": False}
+        if pos["done"]:
+            drv.rejoin(run, pos["tick"], pos["missed"], pos["elapsed"], done=True)
+            self._publish_status()
+            return
+        if tick == 0 and not pos["started"]:  # the run had not begun: begin it
+            drv.run = run
+            drv.begin()
+            return
+        lost = tick - pos["tick"]
+        if lost:
+            self.rejects.note("missed ticks", lost)
+        self.go_on(run, tick, pos, lost)
 
     def extra_statuses(self) -> list[dict]:
         return [status(self.get_name(), self.checkpoints, self.driver.tick, 0)]

@@ -233,31 +233,17 @@ class SimNode(durable.DurableWorld, ScenarioNode):
             trace.seek(cfg["trace_bytes"])
         return pos
 
-    def go_on(self, run: int, tick: int, pos: dict | None) -> None:
-        drv = self.driver
-        floor = pos["tick"] if pos else 0
-        if pos is None or run != pos["run"]:  # no checkpoint (of this run): the run's world from its start
-            self.side.reset(self.side.env.seed)
-            pos = {"run": run, "tick": 0, "missed": 0, "elapsed": 0.0, "outcome": None, "done": False,
-                   "started": False}
-            floor = 0
-            if self.side.trace is not None:
-                self.side.trace.truncate(0)  # the world starts over: so does its trace
-        if pos["done"]:
-            drv.rejoin(run, pos["tick"], pos["missed"], pos["elapsed"], done=True)
-            self._publish_status()
-            return
-        if tick == 0 and not pos["started"]:
-            drv.run = run
-            drv.begin()
-            return
-        lost = tick - floor
+    def fresh_run(self) -> None:
+        self.side.reset(self.side.env.seed)  # no checkpoint of this run: its world from the start
+        if self.side.trace is not None:
+            self.side.trace.truncate(0)  # the world starts over: so does its trace
+
+    def go_on(self, run: int, tick: int, pos: dict, lost: int) -> None:
         outcome = (tick - 1, self.side.skip(lost)) if lost else pos["outcome"]
         if lost:
-            self.rejects.note("missed ticks", lost)
-            self.get_logger().warning(f"ticks {floor}..{tick - 1} were lost with the process that died: counted as "
-                                      "missed")
-        drv.rejoin(run, tick, pos["missed"] + lost, pos["elapsed"], outcome)
+            self.get_logger().warning(f"ticks {pos['tick']}..{tick - 1} were lost with the process that died: "
+                                      "counted as missed")
+        self.driver.rejoin(run, tick, pos["missed"] + lost, pos["elapsed"], outcome)
 
     def destroy_node(self):
         self.save_final()

@@ -314,27 +314,14 @@ class BridgeNode(durable.DurableWorld, ScenarioNode):
         self.driver.iterations = cfg["interactions"]
         return pos
 
-    def go_on(self, run: int, tick: int, pos: dict | None) -> None:
+    def go_on(self, run: int, tick: int, pos: dict, lost: int) -> None:
         from homeo_decision import codec
         from homeo_decision.environment import Outcome
 
         drv = self.driver
-        if pos is None or run != pos["run"]:  # no checkpoint of this run: its log starts here
-            pos = {"run": run, "tick": 0, "missed": 0, "elapsed": 0.0, "outcome": None, "done": False,
-                   "started": False}
-        if pos["done"]:
-            drv.rejoin(run, pos["tick"], pos["missed"], pos["elapsed"], done=True)
-            self._publish_status()
-            return
-        if tick == 0 and not pos["started"]:
-            drv.run = run
-            drv.begin()
-            return
-        lost = tick - pos["tick"]
         outcome = pos["outcome"]
         if lost:  # the robot went on meanwhile; the bridge saw none of it
             outcome = (tick - 1, codec.outcome_fields(self.sc, Outcome(None, 0, None, None, None)))
-            self.rejects.note("missed ticks", lost)
             self.get_logger().warning(f"interactions {pos['tick'] + 1}..{tick} were lost with the process that died: "
                                       "counted as missed")
         self.env.tick = tick  # the interactions go on being numbered from here
