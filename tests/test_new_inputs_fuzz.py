@@ -123,18 +123,8 @@ def trained(thesis):
 def test_a_checkpoint_with_any_field_changed_restores_whole_or_not_at_all(thesis, trained, data, tmp_path):
     """As the node reads one: the file (checkpoint.load), then the restore."""
     _, ck = trained
-    bad = copy.deepcopy(ck)
-    where = data.draw(st.sampled_from(["params", "rng", "state", "state.tables", "state.objects", "ticks",
-                                       "tick_offset", "version"]))
-    target = bad
-    *path, last = where.split(".")
-    for p in path:
-        target = target[p]
-    if isinstance(target.get(last), dict) and target[last] and data.draw(st.booleans()):
-        inner = data.draw(st.sampled_from(sorted(target[last])))
-        target[last][inner] = data.draw(JSON)
-    else:
-        target[last] = data.draw(JSON)
+    bad = _mutate(data, ck, ["params", "rng", "state", "state.tables", "state.objects", "ticks", "tick_offset",
+                             "version"])
     core = DecisionCore(thesis, 1)
     before = (json.dumps(core.q.q), core.seed, core.dod, core.rng.state())
     f = tmp_path / "homeo_decision.json"
@@ -164,19 +154,9 @@ def test_any_answer_to_system_version_has_a_scale_or_is_refused(value):
 @pytest.fixture(scope="module")
 def world_ck(thesis):
     """A simulation node's checkpoint after 20 ticks (its streams drawn from), as the file holds it."""
-    from homeo_msgs_py.lockstep import LockstepDriver
-    from homeo_sim.checkpoint import world_checkpoint
-    from homeo_sim.world_side import SimWorldSide
-    from test_world_checkpoint import ScriptedRobot, _config, _drive
+    from test_world_checkpoint import world_at_tick_20
 
-    side = SimWorldSide(thesis, 5, intention_accuracy=True)
-    drv = LockstepDriver(side, lambda *a: None, iterations=40)
-    got = {}
-    drv.on_step = lambda k: got.update(ck=json.loads(json.dumps(world_checkpoint(side, drv.position(),
-                                                                                 _config(thesis, side, drv)))))
-    drv.begin()
-    _drive(drv, ScriptedRobot(thesis), [], until=20)
-    return got["ck"], _config(thesis, side, drv)
+    return world_at_tick_20(thesis, 5)
 
 
 def _mutate(data, ck: dict, places) -> dict:

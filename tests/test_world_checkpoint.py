@@ -50,6 +50,19 @@ def _drive(drv, robot, sent, until=None):
         drv.on_action(robot.answer(drv, drv.tick))
 
 
+def world_at_tick_20(sc, seed: int) -> tuple[dict, dict]:
+    """The checkpoint a world run of 40 ticks writes as it steps tick 20 (JSON round-tripped), and the
+    run's config."""
+    side = SimWorldSide(sc, seed, intention_accuracy=True)
+    drv = LockstepDriver(side, lambda *a: None, iterations=40)
+    got = {}
+    drv.on_step = lambda k: got.update(ck=json.loads(json.dumps(world_checkpoint(side, drv.position(),
+                                                                                 _config(sc, side, drv)))))
+    drv.begin()
+    _drive(drv, ScriptedRobot(sc), [], until=20)
+    return got["ck"], _config(sc, side, drv)
+
+
 def test_a_world_restored_from_its_checkpoint_goes_on_exactly_as_one_that_never_stopped(thesis, tmp_path):
     """The checkpoint is taken where the driver takes it (before tick T is stepped) and read back
     from the file; the restored world answers the same actions with the same messages, byte for
@@ -179,14 +192,8 @@ def test_an_undisturbed_bus_run_records_every_tick(thesis):
     ("state.position.outcome", [3, {"action": "Fly"}]), ("state.position.missed", 10**6),
     ("state.position.done", "no"), ("ticks", 7)])
 def test_a_corrupt_world_checkpoint_is_refused_whole_with_one_line(thesis, field, value):
-    side = SimWorldSide(thesis, 2, intention_accuracy=True)
-    drv = LockstepDriver(side, lambda *a: None, iterations=40)
-    good = {}
-    drv.on_step = lambda k: good.update(ck=json.loads(json.dumps(world_checkpoint(side, drv.position(),
-                                                                                  _config(thesis, side, drv)))))
-    drv.begin()
-    _drive(drv, ScriptedRobot(thesis), [], until=20)
-    bad = copy.deepcopy(good["ck"])
+    good, config = world_at_tick_20(thesis, 2)
+    bad = copy.deepcopy(good)
     *path, last = field.split(".")
     target = bad
     for p in path:
@@ -195,6 +202,6 @@ def test_a_corrupt_world_checkpoint_is_refused_whole_with_one_line(thesis, field
     fresh = SimWorldSide(thesis, 2, intention_accuracy=True)
     before = (fresh.env.state(), fresh.rec.state(), fresh.hits.state())
     with pytest.raises(CheckpointError) as exc:
-        restore_world(fresh, bad, _config(thesis, fresh, drv), "f")
+        restore_world(fresh, bad, config, "f")
     assert "\n" not in str(exc.value) and str(exc.value).startswith("f")
     assert (fresh.env.state(), fresh.rec.state(), fresh.hits.state()) == before
