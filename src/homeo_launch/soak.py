@@ -10,8 +10,16 @@ Three parts, each optional:
 For each process it prints the resident memory (VmRSS) at the start and at the end, the slope in
 MB per 10,000 ticks (least squares over the samples after the first 10%: allocator and caches
 settle first), and its CPU time per tick over the first and the last 10% of the ticks with their
-ratio; for the whole run, the wall-clock time per tick at both ends. Targets (issue 12): slope below 0.1 MB per 10,000 ticks, last/first below 1.1. A
-benchmark, not a test: the figures depend on the machine and its load.
+ratio; for the whole run, the wall-clock time per tick at both ends. Targets (issue 12): slope below
+0.1 MB per 10,000 ticks, last/first below 1.1. A benchmark, not a test: the figures depend on the
+machine and its load.
+
+On a shared machine the CPU time of a fixed piece of work is not fixed: it grows with the load (other
+processes take the caches and the cores' shared parts). So each part also runs a reference, a process
+doing the same small piece of Python work (JSON decode and encode, as a node does per message)
+again and again with short sleeps, and prints its CPU time per piece over the same first and last 10%
+of the ticks: a process's last/first divided by the reference's (``/ref``) is what is left once the
+machine's drift is taken out.
 """
 
 from __future__ import annotations
@@ -65,12 +73,90 @@ def per_tick_ends(times: list[tuple[int, float]], n: int) -> tuple[float, float]
     """Seconds per tick over the first and the last tenth of ``n`` ticks, from (tick, time) samples:
     from the first sample to the first one at least n/10 ticks later, and from the last one at least
     n/10 ticks before the end to the end."""
-    w = max(1, n // 10)
-    t0, s0 = times[0]
-    t1, s1 = next(((t, s) for t, s in times if t >= t0 + w), times[-1])
-    t3, s3 = times[-1]
-    t2, s2 = next(((t, s) for t, s in reversed(times) if t <= t3 - w), times[0])
+    a, b, c, d = ends_index([t for t, _ in times], n)
+    (t0, s0), (t1, s1), (t2, s2), (t3, s3) = times[a], times[b], times[c], times[d]
     return (s1 - s0) / max(1, t1 - t0), (s3 - s2) / max(1, t3 - t2)
+
+
+REF_PIECE = json.dumps({"tick": 12345, "run": 0, "fields": {
+    "drives": [0.125 * i for i in range(10)], "action": "approach", "intention": [0.1, 0.7, 0.2],
+    "objects": {f"object_{i}": {"state": "idle", "near": i % 2 == 0, "p": [0.25, 0.5, 0.25]} for i in range(6)}}})
+REF_PAUSE_S = 0.002  # between pieces: a node wakes up for each message; so does the reference
+
+
+def reference_loop() -> None:
+    """The reference process: pieces of fixed work, each followed by a short sleep; a line on stdin
+    asks for "pieces CPU-seconds" on stdout; end of stdin ends it."""
+    import select
+
+    n = 0
+    while True:
+        for _ in range(2):
+            m = json.loads(REF_PIECE)
+            m["tick"] += n
+            json.dumps(m, sort_keys=True)
+        n += 1
+        r, _, _ = select.select([sys.stdin], [], [], REF_PAUSE_S)
+        if r:
+            if not sys.stdin.readline():
+                return
+            sys.stdout.write(f"{n} {time.process_time()!r}\n")
+            sys.stdout.flush()
+
+
+class Reference:
+    """The reference process, sampled as (tick, pieces, CPU seconds) alongside the processes watched."""
+
+    def __init__(self):
+        import subprocess
+
+        self.proc = subprocess.Popen([sys.executable, "-c", "from homeo_launch.soak import reference_loop; "
+                                      "reference_loop()"], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
+                                     env=dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p)))
+        self.samples: list[tuple[int, int, float]] = []
+
+    def sample(self, tick: int) -> None:
+        try:
+            self.proc.stdin.write("\n")
+            self.proc.stdin.flush()
+            n, c = self.proc.stdout.readline().split()
+            self.samples.append((tick, int(n), float(c)))
+        except (OSError, ValueError):
+            pass
+
+    def __enter__(self) -> "Reference":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        try:
+            self.proc.stdin.close()
+            self.proc.wait(timeout=5)
+        except Exception:  # noqa: BLE001 - it must not outlive the soak
+            self.proc.kill()
+            self.proc.wait()
+
+    def summary(self, n: int) -> dict | None:
+        """CPU seconds per piece over the first and the last tenth of ``n`` ticks."""
+        if len(self.samples) < 2:
+            return None
+        a, b, c, d = ends_index([t for t, _, _ in self.samples], n)
+        s = self.samples
+        first = (s[b][2] - s[a][2]) / max(1, s[b][1] - s[a][1])
+        last = (s[d][2] - s[c][2]) / max(1, s[d][1] - s[c][1])
+        return {"cpu_s_per_piece_first": first, "cpu_s_per_piece_last": last,
+                "last_over_first": last / first if first else float("nan")}
+
+
+def ends_index(ticks: list[int], n: int) -> tuple[int, int, int, int]:
+    """Indices of the samples ``per_tick_ends`` takes: the first tenth from a to b, the last from c to d."""
+    w = max(1, n // 10)
+    last = len(ticks) - 1
+    b = next((i for i, t in enumerate(ticks) if t >= ticks[0] + w), last)
+    c = next((i for i in range(last, -1, -1) if ticks[i] <= ticks[last] - w), 0)
+    return 0, b, c, last
 
 
 def soak_in_process(iterations: int, seed: int = 0, progress=None) -> dict:
@@ -89,15 +175,21 @@ def soak_in_process(iterations: int, seed: int = 0, progress=None) -> dict:
         if k % every == 0:
             times.append((k, time.perf_counter()))
             cpu.append((k, time.process_time()))
+            ref.sample(k)
             if progress is not None:
                 progress(k)
         if k % mem_every == 0:
             mem.append((k, rss_mb()))
 
-    res = sim.run(iterations, on_tick=on_tick)
+    with Reference() as ref:
+        ref.sample(0)
+        times[0], cpu[0] = (0, time.perf_counter()), (0, time.process_time())
+        res = sim.run(iterations, on_tick=on_tick)
     first, last = per_tick_ends(times, iterations)
     return {"ticks": iterations, "HSR": res.metrics["HSR"], "wall_s_per_tick": [first, last],
-            "processes": {"homeo-sim (in-process)": _summary(mem, cpu, iterations)}}
+            "processes": {"homeo-sim (in-process)": _summary(mem, cpu, iterations)},
+            "reference": ref.summary(iterations),
+            "samples": {"time": times, "cpu": {"homeo-sim (in-process)": cpu}, "reference": ref.samples}}
 
 
 def _summary(mem, cpu, n) -> dict:
@@ -135,29 +227,34 @@ def soak_bus(ticks: int, seed: int = 0, progress=None) -> dict:
         for i in NODES[n].reads(True):
             readers.setdefault(i.topic, []).append(n)
     every, mem_every = max(1, ticks // 100), max(1, ticks // SAMPLES)
-    times, cpu, mem = [(0, time.perf_counter())], [(0, time.process_time())], [(0, rss_mb())]
-    driver.begin()
-    while driver.state != DONE:
-        batch, queue[:] = list(queue), []
-        for key, text in batch:
-            m = decode(text, voc)
-            for n in readers.get(key, []):
-                if n == "homeo_sim":
-                    driver.on_action(m)
-                    continue
-                for k, fields in hosts[n].stage.put(key, m):
-                    send(NODES[n].publishes[0], k, fields)
-        k = driver.tick
-        if k >= times[-1][0] + every:
-            times.append((k, time.perf_counter()))
-            cpu.append((k, time.process_time()))
-            side.status(False)  # the metrics, as the node publishes them
-            if progress is not None:
-                progress(k)
-        if k >= mem[-1][0] + mem_every:
-            mem.append((k, rss_mb()))
+    with Reference() as ref:
+        times, cpu, mem = [(0, time.perf_counter())], [(0, time.process_time())], [(0, rss_mb())]
+        ref.sample(0)
+        driver.begin()
+        while driver.state != DONE:
+            batch, queue[:] = list(queue), []
+            for key, text in batch:
+                m = decode(text, voc)
+                for n in readers.get(key, []):
+                    if n == "homeo_sim":
+                        driver.on_action(m)
+                        continue
+                    for k, fields in hosts[n].stage.put(key, m):
+                        send(NODES[n].publishes[0], k, fields)
+            k = driver.tick
+            if k >= times[-1][0] + every:
+                times.append((k, time.perf_counter()))
+                cpu.append((k, time.process_time()))
+                ref.sample(k)
+                side.status(False)  # the metrics, as the node publishes them
+                if progress is not None:
+                    progress(k)
+            if k >= mem[-1][0] + mem_every:
+                mem.append((k, rss_mb()))
+    name = "graph code, no DDS (in-process)"
     return {"ticks": ticks, "HSR": side.status(True)["metrics"]["HSR"], "wall_s_per_tick": list(per_tick_ends(times, ticks)),
-            "processes": {"graph code, no DDS (in-process)": _summary(mem, cpu, ticks)}}
+            "processes": {name: _summary(mem, cpu, ticks)}, "reference": ref.summary(ticks),
+            "samples": {"time": times, "cpu": {name: cpu}, "reference": ref.samples}}
 
 
 def soak_graph(ticks: int, seed: int = 0, progress=None) -> dict:
@@ -186,6 +283,7 @@ def soak_graph(ticks: int, seed: int = 0, progress=None) -> dict:
                 c = cpu_s(pid)
                 if c is not None:
                     cpu.setdefault(name, []).append((tick, c))
+            ref.sample(tick)
         if tick >= next_mem[0] and procs:
             next_mem[0] = tick + mem_every
             for name, pid in procs.items():
@@ -195,24 +293,30 @@ def soak_graph(ticks: int, seed: int = 0, progress=None) -> dict:
         if progress is not None:
             progress(tick)
 
-    with tempfile.TemporaryDirectory(prefix="homeo-soak-") as tmp:
+    with Reference() as ref, tempfile.TemporaryDirectory(prefix="homeo-soak-") as tmp:
         o = SimOptions(iterations=ticks, seed=seed, data_dir=tmp, checkpoint_dir=os.path.join(tmp, "checkpoints"))
         status = run_graph(o, quiet=True, on_progress=on_progress, on_start=on_start)
     return {"ticks": ticks, "missed": status.get("missed"), "restarts": status.get("restarts", {}),
             "HSR": status["metrics"]["HSR"], "wall_s_per_tick": list(per_tick_ends(times, ticks)),
-            "processes": {n: _summary(m, cpu[n], ticks) for n, m in mem.items() if n in cpu}}
+            "processes": {n: _summary(m, cpu[n], ticks) for n, m in mem.items() if n in cpu},
+            "reference": ref.summary(ticks), "samples": {"time": times, "cpu": cpu, "reference": ref.samples}}
 
 
 def format_part(title: str, part: dict) -> str:
     w0, w1 = part["wall_s_per_tick"]
+    ref = part.get("reference")
+    r = ref["last_over_first"] if ref else float("nan")
     lines = [f"{title}: {part['ticks']} ticks (HSR {part['HSR']:.3f}); wall clock per tick: first 10% "
              f"{w0 * 1e3:.4f} ms, last 10% {w1 * 1e3:.4f} ms (ratio {w1 / w0:.3f})",
              f"  {'process':32} {'RSS start':>10} {'RSS end':>9} {'MB/10k':>8} {'CPU ms/tick first':>18} "
-             f"{'last':>7} {'last/first':>10}"]
+             f"{'last':>7} {'last/first':>10} {'/ref':>6}"]
     for name, s in part["processes"].items():
         lines.append(f"  {name:32} {s['rss_start_mb']:9.1f}M {s['rss_end_mb']:8.1f}M {s['slope_mb_per_10k']:8.3f} "
                      f"{s['cpu_s_per_tick_first'] * 1e3:18.4f} {s['cpu_s_per_tick_last'] * 1e3:7.4f} "
-                     f"{s['last_over_first']:10.3f}")
+                     f"{s['last_over_first']:10.3f} {s['last_over_first'] / r:6.3f}")
+    if ref:
+        lines.append(f"  {'reference (ms per piece of work)':32} {'':10} {'':9} {'':8} "
+                     f"{ref['cpu_s_per_piece_first'] * 1e3:18.4f} {ref['cpu_s_per_piece_last'] * 1e3:7.4f} {r:10.3f}")
     return "\n".join(lines)
 
 
@@ -247,11 +351,16 @@ def cmd_soak(a) -> int:
     finally:
         if bar is not None:
             bar.close()
+    samples = {k: part.pop("samples") for k, part in out.items()}
+    if a.samples:
+        Path(a.samples).write_text(json.dumps(samples))
     if a.json:
         print(json.dumps(out))
         return 0
     print("target: slope < 0.1 MB per 10,000 ticks, last/first time per tick < 1.1 (per process: CPU time, "
-          "steadier than the wall clock on a shared machine; the wall clock of the whole run above each table)")
+          "steadier than the wall clock on a shared machine; the wall clock of the whole run above each table; "
+          "/ref: last/first over the reference's, the same fixed work's CPU time over the same ticks, which "
+          "takes out the machine's drift)")
     for key, title in (("in_process", "in-process"), ("bus", "graph code on an in-memory bus"), ("graph", "graph")):
         if key in out:
             print(format_part(title, out[key]))
@@ -270,4 +379,6 @@ def add_parser(sub) -> None:
     s.add_argument("--ticks", type=int_at_least(0), default=200_000, help="graph ticks (default 200,000; 0 = skip)")
     s.add_argument("--seed", type=int_at_least(0), default=0)
     s.add_argument("--json", action="store_true")
+    s.add_argument("--samples", metavar="FILE", help="also write the raw samples (tick, clock, each process's "
+                   "CPU seconds; the reference's pieces and CPU seconds) to FILE as JSON")
     s.add_argument("--quiet", action="store_true", help="no progress bar")
