@@ -257,7 +257,97 @@ def soak_bus(ticks: int, seed: int = 0, progress=None) -> dict:
             "samples": {"time": times, "cpu": {name: cpu}, "reference": ref.samples}}
 
 
-def soak_graph(ticks: int, seed: int = 0, progress=None) -> dict:
+class Fresh:
+    """A short fresh graph run beside the long one (``homeo-launch soak --ticks N`` on another ROS
+    domain, so the two graphs share the machine and nothing else), its samples kept."""
+
+    def __init__(self, ticks: int, domain: int, tmp: str, name: str):
+        import subprocess
+
+        self.path = os.path.join(tmp, f"fresh-{name}.json")
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "homeo_launch.cli", "soak", "--iterations", "0", "--ticks", str(ticks), "--quiet",
+             "--json", "--samples", self.path], stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE, text=True,
+            env=dict(os.environ, ROS_DOMAIN_ID=str(domain), PYTHONPATH=os.pathsep.join(p for p in sys.path if p)))
+
+    def running(self) -> bool:
+        return self.proc.poll() is None
+
+    def result(self) -> dict | None:
+        """The fresh run's graph samples (None if it failed); waits for it."""
+        err = self.proc.communicate()[1]
+        try:
+            return json.loads(Path(self.path).read_text())["graph"]
+        except (OSError, ValueError, KeyError):
+            print(f"soak: the fresh graph failed: {err.strip()[-300:]}", file=sys.stderr)
+            return None
+
+    def stop(self) -> None:
+        if self.running():
+            self.proc.terminate()
+            try:
+                self.proc.communicate(timeout=30)
+            except Exception:  # noqa: BLE001 - it must not outlive the soak
+                self.proc.kill()
+                self.proc.communicate()
+
+
+def _at(pts: list, when: float) -> tuple[float, float] | None:
+    """(count, CPU seconds) at the clock ``when`` from [(clock, count, CPU s)], interpolated; None outside."""
+    import bisect
+
+    clocks = [p[0] for p in pts]
+    i = bisect.bisect_left(clocks, when)
+    if not pts or i >= len(pts) or when < clocks[0]:
+        return None
+    if i == 0 or clocks[i] == when:
+        return pts[i][1], pts[i][2]
+    a, b = pts[i - 1], pts[i]
+    f = (when - a[0]) / (b[0] - a[0])
+    return a[1] + f * (b[1] - a[1]), a[2] + f * (b[2] - a[2])
+
+
+def clocked(samples: dict) -> dict:
+    """A graph part's samples as name -> [(clock, tick, CPU s)] (the reference: pieces, not ticks)."""
+    clock = dict((k, w) for k, w in samples["time"])
+    out = {name: [(clock[k], k, c) for k, c in pts if k in clock] for name, pts in samples["cpu"].items()}
+    out["reference"] = [(clock[k], n, c) for k, n, c in samples.get("reference", []) if k in clock]
+    return out
+
+
+def side_by_side(long: dict, fresh: dict, skip: float = 0.2) -> dict:
+    """Each process's CPU seconds per tick in the long run and in the fresh one over the same clock
+    window: the fresh run's samples after its first ``skip`` (start-up) to its last before the final
+    one. name -> {"long", "fresh", "ratio", "long_ticks"}; "seconds": the window's length."""
+    long, fresh = clocked(long), clocked(fresh)
+    clocks = [p[0] for p in fresh.get("homeo_sim", [])]
+    if len(clocks) < 5:
+        return {}
+    own = [p[0] for p in long.get("homeo_sim", [])]
+    if not own:
+        return {}
+    w0, w1 = max(clocks[int(len(clocks) * skip)], own[0]), min(clocks[-2], own[-1])
+    if w1 <= w0:
+        return {}
+    out: dict = {"seconds": w1 - w0}
+    for name, pts in fresh.items():
+        if name not in long:
+            continue
+        a0, a1, b0, b1 = _at(long[name], w0), _at(long[name], w1), _at(pts, w0), _at(pts, w1)
+        if None in (a0, a1, b0, b1) or a1[0] <= a0[0] or b1[0] <= b0[0]:
+            continue
+        ca, cb = (a1[1] - a0[1]) / (a1[0] - a0[0]), (b1[1] - b0[1]) / (b1[0] - b0[0])
+        out[name] = {"long": ca, "fresh": cb, "ratio": ca / cb}
+        if name != "reference":
+            out[name]["long_ticks"] = [a0[0], a1[0]]
+    return out
+
+
+def soak_graph(ticks: int, seed: int = 0, progress=None, fresh: int = 0, fresh_domain: int | None = None) -> dict:
+    """``fresh``: also run a fresh graph of that many ticks beside the long run near its start and
+    again near its end (on ROS domain ``fresh_domain``), and compare the cost per tick over the same
+    minutes (``side_by_side``): the long run's growth with the machine's drift taken out."""
     from .sim import SimOptions, run_graph
 
     times: list = []
@@ -273,8 +363,17 @@ def soak_graph(ticks: int, seed: int = 0, progress=None) -> dict:
         procs.update(graph.pids())
         # a restarted node would have a new pid: the soak counts on none
 
+    # the fresh runs: the early one once the long run is under way, the late one so that it ends
+    # within the long run's last tenth (both graphs go at about the same pace)
+    fresh_at = {"early": max(100, ticks // 100), "late": max(ticks - ticks // 10, ticks - int(1.3 * fresh) - ticks // 50)}
+    fresh_runs: dict = {}
+
     def on_progress(tick, fields):
         now = time.perf_counter()
+        if fresh and tmp_dir:
+            for name, at in fresh_at.items():
+                if name not in fresh_runs and tick >= at and not any(f.running() for f in fresh_runs.values()):
+                    fresh_runs[name] = Fresh(fresh, fresh_domain, tmp_dir[0], name)
         # a bounded number of samples: the watcher must not grow with the run it watches
         if fields.get("state") in ("running", "finishing", "done") and (not times or tick >= times[-1][0] + step
                                                                         or fields.get("done")):
@@ -293,13 +392,26 @@ def soak_graph(ticks: int, seed: int = 0, progress=None) -> dict:
         if progress is not None:
             progress(tick)
 
+    tmp_dir: list = []
     with Reference() as ref, tempfile.TemporaryDirectory(prefix="homeo-soak-") as tmp:
+        tmp_dir.append(tmp)
         o = SimOptions(iterations=ticks, seed=seed, data_dir=tmp, checkpoint_dir=os.path.join(tmp, "checkpoints"))
-        status = run_graph(o, quiet=True, on_progress=on_progress, on_start=on_start)
-    return {"ticks": ticks, "missed": status.get("missed"), "restarts": status.get("restarts", {}),
-            "HSR": status["metrics"]["HSR"], "wall_s_per_tick": list(per_tick_ends(times, ticks)),
-            "processes": {n: _summary(m, cpu[n], ticks) for n, m in mem.items() if n in cpu},
-            "reference": ref.summary(ticks), "samples": {"time": times, "cpu": cpu, "reference": ref.samples}}
+        try:
+            status = run_graph(o, quiet=True, on_progress=on_progress, on_start=on_start)
+            fresh_samples = {name: f.result() for name, f in fresh_runs.items()}
+        finally:
+            for f in fresh_runs.values():
+                f.stop()
+    samples = {"time": times, "cpu": cpu, "reference": ref.samples}
+    out = {"ticks": ticks, "missed": status.get("missed"), "restarts": status.get("restarts", {}),
+           "HSR": status["metrics"]["HSR"], "wall_s_per_tick": list(per_tick_ends(times, ticks)),
+           "processes": {n: _summary(m, cpu[n], ticks) for n, m in mem.items() if n in cpu},
+           "reference": ref.summary(ticks), "samples": samples}
+    if fresh:
+        out["fresh"] = {"ticks": fresh, **{name: side_by_side(samples, fs) if fs else {}
+                                           for name, fs in fresh_samples.items()}}
+        samples["fresh"] = fresh_samples
+    return out
 
 
 def format_part(title: str, part: dict) -> str:
@@ -317,15 +429,41 @@ def format_part(title: str, part: dict) -> str:
     if ref:
         lines.append(f"  {'reference (ms per piece of work)':32} {'':10} {'':9} {'':8} "
                      f"{ref['cpu_s_per_piece_first'] * 1e3:18.4f} {ref['cpu_s_per_piece_last'] * 1e3:7.4f} {r:10.3f}")
+    if "fresh" in part:
+        lines += format_fresh(part["fresh"])
     return "\n".join(lines)
+
+
+def format_fresh(fr: dict) -> list[str]:
+    e, la = fr.get("early", {}), fr.get("late", {})
+    lines = [f"  beside a fresh graph of {fr['ticks']} ticks over the same minutes ({e.get('seconds', 0):.0f} s "
+             f"early, {la.get('seconds', 0):.0f} s late): CPU ms/tick of the long run and of the fresh one",
+             f"  {'process':16} {'early: long ticks':>18} {'long':>7} {'fresh':>7} {'ratio':>6} "
+             f"{'late: long ticks':>17} {'long':>7} {'fresh':>7} {'ratio':>6} {'late/early':>10}"]
+
+    def cols(x):
+        if not x:
+            return f"{'-':>18} {'':7} {'':7} {'':6}"
+        t = f"{x['long_ticks'][0]:.0f}-{x['long_ticks'][1]:.0f}" if "long_ticks" in x else ""
+        return f"{t:>18} {x['long'] * 1e3:7.4f} {x['fresh'] * 1e3:7.4f} {x['ratio']:6.3f}"
+
+    for name in [n for n in e if n != "seconds"] + [n for n in la if n not in e and n != "seconds"]:
+        a, b = e.get(name), la.get(name)
+        q = f"{b['ratio'] / a['ratio']:10.3f}" if a and b else f"{'-':>10}"
+        lines.append(f"  {name:16} {cols(a)} {cols(b)[1:]} {q}")
+    return lines
 
 
 def cmd_soak(a) -> int:
     from homeo_msgs_py.cli_args import UserError
 
-    for opt, v in (("--iterations", a.iterations), ("--bus", a.bus), ("--ticks", a.ticks)):
+    for opt, v in (("--iterations", a.iterations), ("--bus", a.bus), ("--ticks", a.ticks), ("--fresh", a.fresh)):
         if 0 < v < 100:
             raise UserError(f"{opt} {v}: at least 100 ticks (or 0 to skip)")
+    if a.fresh and a.fresh * 10 > a.ticks:
+        raise UserError(f"--fresh {a.fresh}: at most a tenth of --ticks (the late one must fit in the last tenth)")
+    if a.fresh_domain is not None and a.fresh_domain > 232:
+        raise UserError(f"--fresh-domain {a.fresh_domain}: a ROS domain id is at most 232")
     out = {}
     bar = None
     if not a.quiet:
@@ -347,7 +485,8 @@ def cmd_soak(a) -> int:
             out["bus"] = soak_bus(a.bus, a.seed, progress)
             base[0] += a.bus
         if a.ticks:
-            out["graph"] = soak_graph(a.ticks, a.seed, progress)
+            domain = a.fresh_domain if a.fresh_domain is not None else (int(os.environ.get("ROS_DOMAIN_ID") or 0) + 1) % 233
+            out["graph"] = soak_graph(a.ticks, a.seed, progress, fresh=a.fresh, fresh_domain=domain)
     finally:
         if bar is not None:
             bar.close()
@@ -377,6 +516,12 @@ def add_parser(sub) -> None:
                    help="also run the graph's code (driver, hosts, encode/decode, joins) on an in-memory bus in "
                         "this process for TICKS ticks: its cost without DDS (default 0 = skip)")
     s.add_argument("--ticks", type=int_at_least(0), default=200_000, help="graph ticks (default 200,000; 0 = skip)")
+    s.add_argument("--fresh", type=int_at_least(0), default=0, metavar="TICKS",
+                   help="also run a fresh graph of TICKS ticks beside the long one near its start and near its end, "
+                        "and compare their CPU time per tick over the same minutes: the growth with the length of "
+                        "the run, the machine's drift taken out (default 0 = skip)")
+    s.add_argument("--fresh-domain", type=int_at_least(0), default=None, metavar="ID",
+                   help="the fresh graph's ROS domain (default: this one's + 1)")
     s.add_argument("--seed", type=int_at_least(0), default=0)
     s.add_argument("--json", action="store_true")
     s.add_argument("--samples", metavar="FILE", help="also write the raw samples (tick, clock, each process's "
