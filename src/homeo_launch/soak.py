@@ -19,7 +19,10 @@ processes take the caches and the cores' shared parts). So each part also runs a
 doing the same small piece of Python work (JSON decode and encode, as a node does per message)
 again and again with short sleeps, and prints its CPU time per piece over the same first and last 10%
 of the ticks: a process's last/first divided by the reference's (``/ref``) is what is left once the
-machine's drift is taken out.
+machine's drift is taken out, as far as a process feels the load as the reference does. ``--fresh M``
+goes further: a fresh graph of M ticks runs beside the long one (another ROS domain) near its start
+and again near its end, and the two graphs' CPU time per tick over the same minutes are compared
+(docs/GRAPH.md, "Flat cost").
 """
 
 from __future__ import annotations
@@ -252,9 +255,21 @@ def soak_bus(ticks: int, seed: int = 0, progress=None) -> dict:
             if k >= mem[-1][0] + mem_every:
                 mem.append((k, rss_mb()))
     name = "graph code, no DDS (in-process)"
-    return {"ticks": ticks, "HSR": side.status(True)["metrics"]["HSR"], "wall_s_per_tick": list(per_tick_ends(times, ticks)),
+    return {"ticks": ticks, "HSR": side.status(True)["metrics"]["HSR"],
+            "wall_s_per_tick": list(per_tick_ends(times, ticks)),
             "processes": {name: _summary(mem, cpu, ticks)}, "reference": ref.summary(ticks),
             "samples": {"time": times, "cpu": {name: cpu}, "reference": ref.samples}}
+
+
+def _end_with_parent() -> None:
+    """In a child before it runs: SIGTERM when the soak dies without ending it (no orphan graph)."""
+    try:
+        import ctypes
+        import signal
+
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
 
 
 class Fresh:
@@ -268,7 +283,7 @@ class Fresh:
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "homeo_launch.cli", "soak", "--iterations", "0", "--ticks", str(ticks), "--quiet",
              "--json", "--samples", self.path], stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-            stderr=subprocess.PIPE, text=True,
+            stderr=subprocess.PIPE, text=True, preexec_fn=_end_with_parent,
             env=dict(os.environ, ROS_DOMAIN_ID=str(domain), PYTHONPATH=os.pathsep.join(p for p in sys.path if p)))
 
     def running(self) -> bool:
@@ -365,7 +380,8 @@ def soak_graph(ticks: int, seed: int = 0, progress=None, fresh: int = 0, fresh_d
 
     # the fresh runs: the early one once the long run is under way, the late one so that it ends
     # within the long run's last tenth (both graphs go at about the same pace)
-    fresh_at = {"early": max(100, ticks // 100), "late": max(ticks - ticks // 10, ticks - int(1.3 * fresh) - ticks // 50)}
+    fresh_at = {"early": max(100, ticks // 100),
+                "late": max(ticks - ticks // 10, ticks - int(1.3 * fresh) - ticks // 50)}
     fresh_runs: dict = {}
 
     def on_progress(tick, fields):
@@ -485,7 +501,9 @@ def cmd_soak(a) -> int:
             out["bus"] = soak_bus(a.bus, a.seed, progress)
             base[0] += a.bus
         if a.ticks:
-            domain = a.fresh_domain if a.fresh_domain is not None else (int(os.environ.get("ROS_DOMAIN_ID") or 0) + 1) % 233
+            domain = a.fresh_domain
+            if domain is None:
+                domain = (int(os.environ.get("ROS_DOMAIN_ID") or 0) + 1) % 233
             out["graph"] = soak_graph(a.ticks, a.seed, progress, fresh=a.fresh, fresh_domain=domain)
     finally:
         if bar is not None:
