@@ -56,3 +56,6 @@ def test_soak_runs_its_in_process_parts():
     r = subprocess.run([sys.executable, "-m", "homeo_launch.cli", "soak", "--ticks", "50"], capture_output=True,
                        text=True, timeout=60)
     assert r.returncode == 2 and "at least 100" in r.stderr
+    r = subprocess.run([sys.executable, "-m", "homeo_launch.cli", "soak", "--iterations", "0", "--ticks", "1000",
+                        "--fresh", "200"], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2 and "at most a tenth" in r.stderr

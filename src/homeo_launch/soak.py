@@ -379,9 +379,8 @@ def soak_graph(ticks: int, seed: int = 0, progress=None, fresh: int = 0, fresh_d
         # a restarted node would have a new pid: the soak counts on none
 
     # the fresh runs: the early one once the long run is under way, the late one so that it ends
-    # within the long run's last tenth (both graphs go at about the same pace)
-    fresh_at = {"early": max(100, ticks // 100),
-                "late": max(ticks - ticks // 10, ticks - int(1.3 * fresh) - ticks // 50)}
+    # before the long run does (both graphs go at about the same pace; a graph takes seconds to start)
+    fresh_at = {"early": max(100, ticks // 100), "late": max(ticks // 2, ticks - int(1.3 * fresh) - ticks // 50)}
     fresh_runs: dict = {}
 
     def on_progress(tick, fields):
