@@ -172,3 +172,108 @@ def test_bad_new_open_choice_is_one_line_error(override, words):
     assert "\n" not in str(e.value)
     for w in words:
         assert w in str(e.value)
+
+
+# -- the readings of issue 15's second part: time_increase, drive_growth, no_activated_motivation -------
+
+def test_new_readings_default_to_the_old_behaviour(thesis):
+    assert thesis.open["time_increase"] == "after_action"
+    assert thesis.open["drive_growth"] == {}
+    assert thesis.open["no_activated_motivation"] == "argmax"
+    assert thesis.internal_states == thesis.motivation_names and thesis.none_state == -1
+
+
+def _dyn(overrides, source="body"):
+    from homeo_decision.drives import DriveDynamics
+    return DriveDynamics(load_scenario(overrides=overrides), source)
+
+
+def test_time_increase_order_matters_only_at_the_bounds(enc):
+    """Rest at NRes 10 (rate 2, effect -20): action then time reads 2, time then action reads 0."""
+    from homeo_sim.environment import SimEnvironment
+
+    reads = {}
+    for order in ("after_action", "before_action"):
+        env = SimEnvironment(load_scenario(overrides={"time_increase": order}), seed=0)
+        sc = env.sc
+        env.world.code = enc(sc, "R")  # the human far: Rest is valid
+        nres, neng = sc.drive_names.index("NRes"), sc.drive_names.index("NEng")
+        env.body.values[nres], env.body.values[neng] = 10.0, 40.0
+        env.step(sc.action_index("Rest"))
+        reads[order] = (env.body.values[nres], env.body.values[neng])
+    assert reads == {"after_action": (2.0, 42.0), "before_action": (0.0, 42.0)}
+
+
+@pytest.mark.parametrize("reading, place, action, grows", [
+    ("human_not_near", "H", "MoveToR", False),  # the human near when the action was taken
+    ("human_not_near", "R", "Rest", True),
+    ("robot_moved", "R", "MoveToH", True),
+    ("robot_moved", "R", "MoveToR", False),  # already there: no move
+    ("robot_moved", "R", "Rest", False),
+    ("not_lowered", "R", "Rest", False),  # Rest lowers NRes
+    ("not_lowered", "R", "MoveToH", True),
+])
+def test_drive_growth_readings(enc, reading, place, action, grows):
+    dyn = _dyn({"drive_growth": {"NRes": reading}})
+    sc = dyn.sc
+    nres = sc.drive_names.index("NRes")
+    assert (nres in dyn.still(enc(sc, place), sc.action_index(action))) is not grows
+    assert dyn.still(enc(sc, place), sc.action_index(action)) == () or not grows
+
+
+def test_drive_growth_applies_to_internal_drives_too(enc):
+    from homeo_decision.drives import DriveModel
+
+    sc = load_scenario(overrides={"drive_growth": {"NSoc": "human_not_near"}})
+    m = DriveModel(sc)
+    nsoc = sc.drive_names.index("NSoc")
+    m.apply_time(still=m.still(enc(sc, "H"), sc.action_index("Chat")))
+    assert m.values[nsoc] == 0.0  # near the human: no growth
+    m.apply_time(still=m.still(enc(sc, "R"), sc.action_index("Rest")))
+    assert m.values[nsoc] == 3.0
+
+
+def test_no_activated_motivation_adds_an_internal_state():
+    from homeo_decision.motivation import motivational_state
+    from homeo_decision.objectq import ObjectQ
+
+    sc = load_scenario(overrides={"no_activated_motivation": "none"})
+    assert sc.internal_states == sc.motivation_names + ["none"] and sc.none_state == 4
+    th = [d.threshold for d in sc.drives]
+    assert motivational_state([0, 10, 10, 10], th, [0, 0, 0, 0], "first", sc.none_state)[1] == 4
+    assert motivational_state([0, 10, 10, 10], th, [0, 0, 0, 0], "first")[1] == 0  # Eq 3.3's argmax
+    assert motivational_state([5, 10, 10, 10], th, [0, 0, 0, 0], "first", sc.none_state)[1] == 0
+    q, q0 = ObjectQ(sc), ObjectQ(load_scenario())
+    assert len(q.q[0]) == len(q0.q[0]) * 5 // 4
+    assert sc.fingerprint() != load_scenario().fingerprint()  # a saved table says which it is
+
+
+def test_no_activated_motivation_none_runs_through_the_messages():
+    from homeo_decision import codec
+    import json
+
+    from homeo_msgs_py.schemas import decode, encode
+
+    sc = load_scenario(overrides={"no_activated_motivation": "none"})
+    code = sc.c.with_intention[0][0]
+    fields = codec.drives_fields(sc, (code, (0.0,) * 4, [0.0] * 4, sc.none_state), codec.world_state(sc, code), None, None)
+    assert fields["m_dom"] == "none"
+    fields = decode(encode("homeo/drives", 1, fields), codec.vocabulary(sc), "homeo/drives").fields
+    json.dumps(fields)
+    assert codec.perception_from_fields(sc, fields)[0][3] == sc.none_state
+
+
+@pytest.mark.parametrize("override, words", [
+    ({"time_increase": "later"}, ("time_increase", "after_action", "before_action")),
+    ({"drive_growth": {"NAch": "always"}}, ("drive_growth", "serving_growth")),
+    ({"drive_growth": {"NSoc": "sometimes"}}, ("drive_growth", "human_not_near", "robot_moved", "not_lowered")),
+    ({"drive_growth": {"Mood": "always"}}, ("drive_growth", "NSoc, NRes, NEng")),
+    ({"drive_growth": ["NSoc"]}, ("drive_growth", "must map")),
+    ({"no_activated_motivation": "nobody"}, ("no_activated_motivation", "argmax", "none")),
+])
+def test_bad_reading_choice_is_one_line_error(override, words):
+    with pytest.raises(ScenarioError) as e:
+        load_scenario(overrides=override)
+    assert "\n" not in str(e.value)
+    for w in words:
+        assert w in str(e.value)

@@ -67,6 +67,9 @@ CHOSEN: dict = {  # chosen by the joint search of issue 15 (--joint, trial 103);
     "metrics_sample": "end",
     "invalid_actions": "excluded",
     "always_valid_actions": [],
+    "time_increase": "after_action",
+    "drive_growth": {},
+    "no_activated_motivation": "argmax",
     "human_no_intention_prob": 0.35,
     "human_leave_prob": 0.0,
     "human_return_prob": 1.0,
@@ -500,6 +503,8 @@ def main(argv=None) -> int:
     ap.add_argument("--sampler-seed", type=int, default=15, help="--joint: the TPE sampler's seed (default 15)")
     ap.add_argument("--confirm-from", metavar="TRIALS.jsonl", default=None,
                     help="--joint: skip the search, confirm the best points of this trials.jsonl")
+    ap.add_argument("--resume-from", metavar="TRIALS.jsonl", default=None,
+                    help="--joint: start the study with the trials of an earlier search (docs/calibration/joint-trials.jsonl)")
     ap.add_argument("--out", default="calibrate-joint", help="--joint: directory for trials.jsonl and joint.json")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                     help="start from the chosen configuration with this change (JSON value)")
@@ -512,7 +517,8 @@ def main(argv=None) -> int:
             joint_search.confirm_from(a.confirm_from, a.search_seeds, a.confirm_seeds, a.confirm_best, a.sampler_seed,
                                       a.out, workers=w)
         else:
-            joint_search.run(a.trials, a.search_seeds, a.confirm_seeds, a.confirm_best, a.sampler_seed, a.out, workers=w)
+            joint_search.run(a.trials, a.search_seeds, a.confirm_seeds, a.confirm_best, a.sampler_seed, a.out, workers=w,
+                             resume_from=a.resume_from)
         return 0
     if not (a.search or a.table or a.trends or a.sensitivity or a.curves or a.probe_record_point):
         a.table = a.trends = a.sensitivity = True

@@ -39,7 +39,10 @@ SC = load_scenario()  # the thesis scenario: its reference block holds Table 4.5
 DRIVES = SC.drive_names
 SEARCHED = ("initial_q", "scold_drive_change", "serving_growth", "reward_span", "on_leave_effects", "tie_break",
             "value_max_over", "metrics_sample", "human_no_intention_prob", "human_leave_prob", "human_return_prob",
-            "human_proposal_choice", "human_proposal_prob", "invalid_actions", "always_valid_actions")
+            "human_proposal_choice", "human_proposal_prob", "invalid_actions", "always_valid_actions",
+            "time_increase", "drive_growth", "no_activated_motivation")
+# drive_growth is searched per drive: NSoc and NRes (Sec 3.3.1 gives each a growth condition); NEng always grows
+GROWTH_SEARCH = {"NSoc": ["always", "human_not_near", "not_lowered"], "NRes": ["always", "robot_moved", "not_lowered"]}
 DOD_SEARCH = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 1.0)
 # the objective's weights (docs/FIDELITY.md): a statement met or a number inside counts 1
 W_TREND, W_DIST, W_TEXT = 0.25, 0.02, 0.5
@@ -56,6 +59,8 @@ LITERAL = {
     "value_max_over": ("all", "Eq 3.15-3.16: the max runs over A_o"),
     "invalid_actions": ("excluded", "Table 3.3: the constraints say which actions can be performed"),
     "always_valid_actions": ([], "Table 3.3: Rest and Chat have constraints"),
+    "drive_growth": ({}, "Table 4.2, Sec 4.2.1: every drive grows with every iteration"),
+    "no_activated_motivation": ("argmax", "Definition 7, Eq 3.3: in every iteration m_dom is the argmax"),
 }
 
 
@@ -70,6 +75,8 @@ def text_distance(o: dict) -> int:
     d += o["value_max_over"] != "all"
     d += o["invalid_actions"] != "excluded"
     d += len(o["always_valid_actions"])
+    d += sum(r != "always" for r in o.get("drive_growth", {}).values())  # time_increase: the text is silent
+    d += o.get("no_activated_motivation", "argmax") != "argmax"
     return int(d)
 
 
@@ -164,14 +171,30 @@ def suggest(trial, start: dict) -> dict:
     o["invalid_actions"] = trial.suggest_categorical("invalid_actions", ["excluded", "no_effect"])
     free = trial.suggest_categorical("always_valid_actions", ["none", "Rest", "Chat", "Rest+Chat"])
     o["always_valid_actions"] = [] if free == "none" else free.split("+")
+    o["time_increase"] = trial.suggest_categorical("time_increase", ["after_action", "before_action"])
+    g = {d: trial.suggest_categorical(f"growth_{d}", readings) for d, readings in GROWTH_SEARCH.items()}
+    o["drive_growth"] = {d: r for d, r in g.items() if r != "always"}
+    o["no_activated_motivation"] = trial.suggest_categorical("no_activated_motivation", ["argmax", "none"])
     return o
 
 
 def _params(o: dict) -> dict:
     """An open block as Optuna parameters (to enqueue a known point)."""
-    p = {k: o[k] for k in SEARCHED if k != "always_valid_actions"}
+    p = {k: o[k] for k in SEARCHED if k not in ("always_valid_actions", "drive_growth")}
     p["always_valid_actions"] = "+".join(o["always_valid_actions"]) or "none"
+    for d in GROWTH_SEARCH:
+        p[f"growth_{d}"] = o.get("drive_growth", {}).get(d, "always")
     return p
+
+
+def _with_defaults(o: dict) -> dict:
+    """An open block of an older trial (before a choice was searched) with the choice at its default."""
+    return {"time_increase": "after_action", "drive_growth": {}, "no_activated_motivation": "argmax", **o}
+
+
+def _distributions(trial) -> dict:
+    """The parameter distributions of the space (from a trial that suggested every parameter)."""
+    return dict(trial.distributions)
 
 
 def _seeds(spec: str) -> list[int]:
@@ -183,13 +206,44 @@ def current_open() -> dict:
     return {k: SC.open[k] for k in SEARCHED}
 
 
+# the hints of a resumed search (issue 15, second part): the new readings one at a time around the default
+RESUME_HINTS = ({"time_increase": "before_action"}, {"drive_growth": {"NSoc": "human_not_near"}},
+                {"drive_growth": {"NSoc": "not_lowered"}}, {"drive_growth": {"NRes": "robot_moved"}},
+                {"drive_growth": {"NRes": "not_lowered"}}, {"no_activated_motivation": "none"})
+
+
 def diff(o: dict, ref: dict) -> str:
     ch = [f"{k}={json.dumps(o[k])}" for k in SEARCHED if o[k] != ref[k]]
     return ", ".join(ch) or "(as the current default)"
 
 
+def _space(optuna) -> dict:
+    """The search space's distributions (for trials added from an earlier search)."""
+    class _Probe:  # records the distributions suggest() asks for
+        def __init__(self):
+            self.distributions = {}
+
+        def _rec(self, name, dist):
+            self.distributions[name] = dist
+            return dist.to_external_repr(dist.to_internal_repr(
+                dist.choices[0] if hasattr(dist, "choices") else dist.low))
+
+        def suggest_float(self, name, low, high, step=None):
+            return self._rec(name, optuna.distributions.FloatDistribution(low, high, step=step))
+
+        def suggest_categorical(self, name, choices):
+            return self._rec(name, optuna.distributions.CategoricalDistribution(choices))
+
+    probe = _Probe()
+    suggest(probe, current_open())
+    return probe.distributions
+
+
 def run(trials: int, search_seeds: str, confirm_seeds: str, n_confirm: int, sampler_seed: int, out: str,
-        workers: int = 1) -> dict:
+        workers: int = 1, resume_from: str | None = None) -> dict:
+    """The search. ``resume_from``: a trials.jsonl of an earlier search (same seeds and objective): its
+    trials enter the study as completed ones (choices searched only since then at their defaults), the
+    new trials continue their numbering, and the confirmation ranks old and new together."""
     import optuna
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
@@ -203,13 +257,31 @@ def run(trials: int, search_seeds: str, confirm_seeds: str, n_confirm: int, samp
     t0 = time.time()
     study = optuna.create_study(direction="maximize",
                                 sampler=optuna.samplers.TPESampler(seed=sampler_seed, multivariate=True))
-    study.enqueue_trial(_params(start))  # the current default is trial 0
-    # and three hints from the earlier, independent search (issue 15: the initial Q value sets how long
-    # the robot explores; a less busy human and a small scolding helped)
-    for hint in ({"initial_q": 5.0}, {"initial_q": 10.0}, {"initial_q": 10.0, "human_no_intention_prob": 0.65,
-                                                           "scold_drive_change": 3.0}):
-        study.enqueue_trial(_params({**start, **hint}))
     evals: list[dict] = []
+    if resume_from:
+        space = _space(optuna)
+        for line in Path(resume_from).read_text().splitlines():
+            if not line.strip():
+                continue
+            e = json.loads(line)
+            e["open"] = _with_defaults(e["open"])
+            e["text_distance"] = text_distance(e["open"])
+            e["score"] = score(e)
+            p = _params(e["open"])
+            for k, dist in space.items():  # snap floats onto the grid (JSON round trips)
+                if isinstance(dist, optuna.distributions.FloatDistribution) and dist.step:
+                    p[k] = round(round((p[k] - dist.low) / dist.step) * dist.step + dist.low, 6)
+            study.add_trial(optuna.trial.create_trial(params=p, distributions=space, value=e["score"]))
+            evals.append(e)
+        for hint in RESUME_HINTS:
+            study.enqueue_trial(_params({**start, **hint}))
+    else:
+        study.enqueue_trial(_params(start))  # the current default is trial 0
+        # and three hints from the earlier, independent search (issue 15: the initial Q value sets how long
+        # the robot explores; a less busy human and a small scolding helped)
+        for hint in ({"initial_q": 5.0}, {"initial_q": 10.0}, {"initial_q": 10.0, "human_no_intention_prob": 0.65,
+                                                               "scold_drive_change": 3.0}):
+            study.enqueue_trial(_params({**start, **hint}))
 
     def objective(trial):
         o = suggest(trial, start)
@@ -233,7 +305,13 @@ def confirm_from(path: str, search_seeds: str, confirm_seeds: str, n_confirm: in
                  workers: int = 1) -> dict:
     """The confirmation stage alone, from a search's ``trials.jsonl`` (e.g. a search stopped early:
     with the same sampler seed its first N trials are those of ``--trials N``)."""
-    evals = [json.loads(line) for line in Path(path).read_text().splitlines() if line.strip()]
+    evals = []
+    for p in path.split(","):  # several files: an earlier search and its resumption
+        evals += [json.loads(line) for line in Path(p).read_text().splitlines() if line.strip()]
+    for e in evals:
+        e["open"] = _with_defaults(e["open"])
+        e["text_distance"] = text_distance(e["open"])
+        e["score"] = score(e)
     outp = Path(out)
     outp.mkdir(parents=True, exist_ok=True)
     return confirm(evals, None, len(evals), _seeds(search_seeds), _seeds(confirm_seeds), n_confirm, sampler_seed,
@@ -251,7 +329,7 @@ def confirm(evals, t_search, trials, s_seeds, c_seeds, n_confirm, sampler_seed, 
             seen.add(key)
             ranked.append(e)
     picks = ranked[:n_confirm]
-    if not any(p["open"] == start for p in picks):
+    if not any(p["open"] == start for p in picks) and any(e["open"] == start for e in evals):
         picks.append(next(e for e in evals if e["open"] == start))
     conf = []
     for p in picks:

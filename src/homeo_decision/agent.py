@@ -42,6 +42,7 @@ class Perceiving:
     def _init_perception(self, sc: Scenario) -> None:
         self.thresholds = [d.threshold for d in sc.drives]
         self.tie_break = sc.open["tie_break"]
+        self.none_state = sc.none_state
         self.stim = sc.c.stim
         self.valid = sc.c.valid
 
@@ -54,7 +55,7 @@ class Perceiving:
 
     def perceive(self, drives: Sequence[float], code: int) -> Percept:
         """Algorithm 1 lines 2-10 on their own: stimuli, intensities (Eq 3.2), m_dom (Eq 3.3), states."""
-        inten, m = motivational_state(drives, self.thresholds, self.stim[code], self.tie_break)
+        inten, m = motivational_state(drives, self.thresholds, self.stim[code], self.tie_break, self.none_state)
         return Percept(code, tuple(drives), inten, m, self._states(m, code))
 
 
@@ -156,7 +157,7 @@ class DecisionCore(Perceiving):
             d_dag = pseudo_drives(p.drives, self.serving, self.praise)
             r_dag = drive_reward(p.drives, d_dag, self.weights, p.m_dom, self.xi)
             # s+ differs from s only in m_dom, from the pseudo drives and unchanged stimuli
-            m_dag = motivational_state(d_dag, self.thresholds, self.stim[p.code], self.tie_break)[1]
+            m_dag = motivational_state(d_dag, self.thresholds, self.stim[p.code], self.tie_break, self.none_state)[1]
             s_dag = self.q.states(m_dag, p.code)
             self.q.pseudo_update(proposal, p.states, r_dag, self.f, s_dag, alpha, self.gamma, p.code)
             r_dag += self.f

@@ -152,7 +152,7 @@ class FlatQ(_Perceiving):
         for n in n_os:
             n_ext *= n
         self.n_ext = c.n_hum * n_ext  # |S_hum x prod_o S_o|
-        self.n_states = len(sc.drives) * self.n_ext
+        self.n_states = len(sc.internal_states) * self.n_ext
         self.n_actions = len(sc.actions)
         base = []
         for code in range(sc.n_codes):

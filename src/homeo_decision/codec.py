@@ -21,7 +21,7 @@ def vocabulary(sc: Scenario) -> Vocabulary:
     return Vocabulary(object_vars={o: {var: list(vals) for var, vals in spec["variables"].items()}
                                    for o, spec in sc.objects.items()},
                       actions=sc.action_names, intentions=sc.intention_names, drives=sc.drive_names,
-                      motivations=sc.motivation_names, locations=sc.locations, presences=PRESENCE,
+                      motivations=sc.motivation_names, internal_states=sc.internal_states, locations=sc.locations, presences=PRESENCE,
                       relations=RELATIONS)
 
 
@@ -142,7 +142,7 @@ def drives_fields(sc: Scenario, perceived: tuple, world: dict, out: Outcome | No
     code, drives, inten, m_dom = perceived
     mot = sc.motivation_names
     f = {"drives": dict(zip(sc.drive_names, drives)), "stimuli": dict(zip(mot, map(float, sc.c.stim[code]))),
-         "intensities": dict(zip(mot, inten)), "m_dom": mot[m_dom],
+         "intensities": dict(zip(mot, inten)), "m_dom": sc.internal_states[m_dom],
          "intention": sc.intention_names[sc.c.intention_of[code]],
          "world": {k: world[k] for k in ("robot", "objects", "human")}}
     if after_action is not None:
@@ -159,7 +159,7 @@ def perception_from_fields(sc: Scenario, d: dict) -> tuple:
     mot = sc.motivation_names
     code = world_code(sc, d["world"], d["intention"])
     perceived = (code, tuple(d["drives"][n] for n in sc.drive_names), [d["intensities"][m] for m in mot],
-                 mot.index(d["m_dom"]))
+                 sc.internal_states.index(d["m_dom"]))
     o = d.get("outcome")
     out = None
     if o is not None:

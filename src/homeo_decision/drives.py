@@ -22,6 +22,10 @@ class DriveDynamics:
         self.rates = [d.rate for d in sc.drives]
         self.delta = sc.c.drive_delta
         self.values = [0.0] * len(sc.drives)
+        # the open choice drive_growth: drives of this subset that grow only on some ticks
+        names = [d.name for d in sc.drives]
+        self.growth_when = tuple((names.index(n), r) for n, r in sc.open.get("drive_growth", {}).items()
+                                 if names.index(n) in self.idx)
         self.reset()
 
     def reset(self, initial: Sequence[float] | None = None) -> None:
@@ -38,11 +42,30 @@ class DriveDynamics:
                 x = v[i] + d[i]
                 v[i] = 0.0 if x < 0.0 else 100.0 if x > 100.0 else x  # clamp, inlined: hot path
 
-    def apply_time(self, skip: int = -1) -> None:
-        """Table 4.2: every drive of the subset grows by its rate (``skip`` one of them)."""
+    def still(self, code: int, action: int | None) -> tuple:
+        """The drives of the subset that do not grow on a tick whose action ``action`` was taken in
+        world ``code`` (the open choice ``drive_growth``; empty when every drive always grows)."""
+        c = self.sc.c
+        out = []
+        for i, reading in self.growth_when:
+            if reading == "human_not_near":  # RELATIONS[0] is "near"
+                grows = c.relation_of[code] != 0
+            elif reading == "robot_moved":
+                grows = action is not None and c.location_of[c.next_code[code][action]] != c.location_of[code]
+            elif reading == "not_lowered":
+                grows = action is None or c.drive_delta[code][action][i] >= 0
+            else:
+                grows = True
+            if not grows:
+                out.append(i)
+        return tuple(out)
+
+    def apply_time(self, skip: int = -1, still: tuple = ()) -> None:
+        """Table 4.2: every drive of the subset grows by its rate (``skip`` one of them, and those in
+        ``still``)."""
         v, r = self.values, self.rates
         for i in self.idx:
-            if i != skip:
+            if i != skip and i not in still:
                 x = v[i] + r[i]
                 v[i] = 0.0 if x < 0.0 else 100.0 if x > 100.0 else x
 
@@ -77,8 +100,10 @@ class DriveModel(DriveDynamics):
         s = self.serving
         self.values[s] = clamp(self.values[s] + (self.praise if feedback > 0 else self.scold))
 
-    def apply_time(self, expressed: bool = True, satisfied: bool = False) -> None:  # type: ignore[override]
-        """Table 4.2 growth; whether the serving drive grows on a tick is the open choice ``serving_growth``."""
+    def apply_time(self, expressed: bool = True, satisfied: bool = False,  # type: ignore[override]
+                   still: tuple = ()) -> None:
+        """Table 4.2 growth; whether the serving drive grows on a tick is the open choice ``serving_growth``
+        (the others': ``drive_growth``, the drives in ``still`` do not grow)."""
         g = self.growth
         grow_serving = g == "always" or (g == "expressed" and expressed) or (g == "unsatisfied" and expressed and not satisfied)
-        DriveDynamics.apply_time(self, -1 if grow_serving else self.serving)
+        DriveDynamics.apply_time(self, -1 if grow_serving else self.serving, still)

@@ -29,11 +29,13 @@ def dominant(intens: Sequence[float], tie_break: str = "first") -> int:
 
 
 def motivational_state(drives: Sequence[float], thresholds: Sequence[float], stimulus: Sequence[float],
-                       tie_break: str = "first") -> tuple[list[float], int]:
+                       tie_break: str = "first", none_state: int = -1) -> tuple[list[float], int]:
     """Eq 3.2 then Eq 3.3: the intensities and the dominant motivation (the robot's internal state,
     Eq 3.6). The one place both are combined: perception, the pseudo state of Eq 3.23 and the
     baselines all call it."""
     inten = [0.0 if d < at else d + s for d, at, s in zip(drives, thresholds, stimulus)]  # Eq 3.2, inlined: hot path
+    if none_state >= 0 and not any(x > 0.0 for x in inten):
+        return inten, none_state  # open choice no_activated_motivation: none activated (Definition 6), no m_dom
     return inten, dominant(inten, tie_break)
 
 

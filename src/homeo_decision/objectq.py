@@ -65,7 +65,7 @@ class ObjectQ:
         self.sc = sc
         self.initial_q = float(sc.open["initial_q"] if initial_q is None else initial_q)
         self.n_obj = len(sc.object_names)
-        self.n_motiv = len(sc.drives)
+        self.n_motiv = len(sc.internal_states)  # m_dom's values (Eq 3.6)
         self.n_hum = c.n_hum
         self.n_os = [len(lbl) for lbl in c.obj_state_labels]
         self.stride = [self.n_hum * n for n in self.n_os]

@@ -34,7 +34,7 @@ class LoadReport:
 def _state_labels(q: ObjectQ, o: int) -> list[str]:
     sc = q.sc
     out = []
-    for m in sc.motivation_names:
+    for m in sc.internal_states:
         for it in sc.intention_names:
             for rel in RELATIONS:
                 for s in sc.c.obj_state_labels[o]:

@@ -75,10 +75,12 @@ class Perception:
         self.sc = sc
         self.thresholds = [d.threshold for d in sc.drives]
         self.tie_break = sc.open["tie_break"]
+        self.none_state = sc.none_state
         self.stim = sc.c.stim
         self.with_intention = sc.c.with_intention
         # the drives right after the action are needed by these two open choices only
         self.keep_after = sc.open["reward_span"] == "action" or sc.open["metrics_sample"] == "after_action"
+        self.time_first = sc.open["time_increase"] == "before_action"
         self.restart()
 
     def restart(self, initial=None) -> None:
@@ -96,23 +98,29 @@ class Perception:
         ``recognised`` intention. Returns ``(perceived code, drives, intensities, m_dom)``."""
         m = self.model
         if out is not None and self.prev_code is not None:
+            fb = out.feedback
+            # Table 4.2; whether the serving drive grows follows the open choice serving_growth, from
+            # what the robot itself can tell: an intention was pending if it recognised one or the
+            # human reacted; it was satisfied if the human praised the action. The other drives'
+            # growth: drive_growth, from the world the action was taken in
+            still = m.still(self.prev_code, out.action) if m.growth_when else ()
+            if self.time_first:  # open choice time_increase: the time increase before the action
+                m.apply_time(self.prev_intention != 0 or fb != 0, fb > 0, still)
             if out.action is not None:
                 m.apply_action(self.prev_code, out.action)  # Table 4.1, in the world the robot perceived
-            fb = out.feedback
             if fb:
                 m.apply_feedback(fb)  # Section 4.2.1: praise -10, a scolding by an open amount
             if self.keep_after:
                 if out.body is not None:
                     m.set_body(out.body)
                 self.after_action = tuple(m.values)
-            # Table 4.2; whether the serving drive grows follows the open choice serving_growth, from
-            # what the robot itself can tell: an intention was pending if it recognised one or the
-            # human reacted; it was satisfied if the human praised the action
-            m.apply_time(self.prev_intention != 0 or fb != 0, fb > 0)
+            if not self.time_first:
+                m.apply_time(self.prev_intention != 0 or fb != 0, fb > 0, still)
         m.set_body(body)
         code = self.with_intention[code][recognised]
         drives = self.drives = tuple(m.values)
-        inten, m_dom = motivational_state(drives, self.thresholds, self.stim[code], self.tie_break)
+        inten, m_dom = motivational_state(drives, self.thresholds, self.stim[code], self.tie_break,
+                                         self.none_state)
         self.prev_code, self.prev_intention = code, recognised
         return code, drives, inten, m_dom
 

@@ -125,7 +125,7 @@ def run_field(script: str | Path | dict, dod: float, seed: int, q_table: str | P
         while not stand.user.done and env.tick < max_interactions:
             p = robot.percept
             out = env.step(a)
-            row = dict(env.last_row, m_dom=sc.motivation_names[p.m_dom], intention=env.last_row["cue_intention"],
+            row = dict(env.last_row, m_dom=sc.internal_states[p.m_dom], intention=env.last_row["cue_intention"],
                        drives=dict(zip(sc.drive_names, [round(x, 1) for x in p.drives])))
             res.log.append(row)
             t += 1

@@ -239,7 +239,7 @@ SCHEMAS: dict[str, dict[str, tuple[Check, bool]]] = {
         "drives": (_map("drives", DRIVE, complete=True), True),
         "stimuli": (_map("motivations", ANY_NUMBER, complete=True), True),
         "intensities": (_map("motivations", ANY_NUMBER, complete=True), True),
-        "m_dom": (_one_of("motivations"), True),
+        "m_dom": (_one_of("internal_states"), True),
         "intention": (_one_of("intentions"), True),  # the one the stimuli were computed with
         # the world these drives were perceived in (robot, objects, human of homeo/world)
         "world": (_obj({"robot": (_obj({"location": (_one_of("locations"), True)}), True),
@@ -255,7 +255,7 @@ SCHEMAS: dict[str, dict[str, tuple[Check, bool]]] = {
     # decision -> simulation or robot: the chosen action (null = none) and the drives it was chosen with
     "homeo/action": {
         "action": (_one_of("actions", nullable=True), True),
-        "m_dom": (_one_of("motivations"), False),
+        "m_dom": (_one_of("internal_states"), False),
         "tau": (_num(0.0, 1e6), False),
         "params": (_obj({"dod": (_num(0.0, 1.0), True), "xi": (_num(0.0, 1e6), True),
                          "gamma": (_num(0.0, 1.0), True), "feedback": (_bool, True),
@@ -307,6 +307,8 @@ class Vocabulary:
 
         self._names: dict[str, list[str]] = {"modes": list(INTENTION_MODES)}
         self._names.update({k: list(v) for k, v in names.items()})
+        # m_dom's values: the motivations, unless the scenario adds "none" (no_activated_motivation)
+        self._names.setdefault("internal_states", self._names.get("motivations", []))
         self.object_vars: dict[str, dict[str, list[str]]] = object_vars or {}
 
     def names(self, kind: str) -> list[str]:

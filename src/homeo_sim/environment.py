@@ -36,6 +36,7 @@ class SimEnvironment:
         # report the body right after the action (in-process only these two open choices need it)
         self.keep_after = body_after if body_after is not None else (
             sc.open["reward_span"] == "action" or sc.open["metrics_sample"] == "after_action")
+        self.time_first = sc.open["time_increase"] == "before_action"
         self._start(seed)
 
     @property
@@ -117,6 +118,10 @@ class SimEnvironment:
 
     def step(self, action: int | None) -> Outcome:
         world, body = self.world, self.body
+        # the body drives that do not grow this tick (open choice drive_growth; usually none)
+        still = body.still(world.code, action) if body.growth_when else ()
+        if self.time_first:  # open choice time_increase: the time increase before the action
+            body.apply_time(still=still)
         if action is not None:
             before = world.execute(action)
             body.apply_action(before, action)
@@ -125,7 +130,8 @@ class SimEnvironment:
             out = Outcome(None, 0, None, None, None, self.human.intention, False)
         if self.keep_after:
             out.body = list(body.values)
-        body.apply_time()
+        if not self.time_first:
+            body.apply_time(still=still)
         h = self.human  # _advance_human, inlined: once per tick
         h.advance(world.code)
         world.set_human(h.present, h.intention)

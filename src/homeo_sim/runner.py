@@ -161,7 +161,7 @@ def trace_line(sc: Scenario, t: int, p, a: int, out, learned, recognised=None) -
         "tick": t,
         "drives": dict(zip(sc.drive_names, p.drives)),
         "intensities": dict(zip(sc.motivation_names, p.intensities)),
-        "m_dom": sc.motivation_names[p.m_dom],
+        "m_dom": sc.internal_states[p.m_dom],
         "intention": sc.intention_names[it] if it else None,
         "action": sc.actions[a].name,
         "feedback": out.feedback,

@@ -12,13 +12,21 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from .compile import _compile
-from .model import (NONE_INTENTION, NULL_OBJECT, OBS_CHANNELS, PRESENCE, RELATIONS, DISTANCES, SCHEMA,
+from .model import (NO_MOTIVATION, NONE_INTENTION, NULL_OBJECT, OBS_CHANNELS, PRESENCE, RELATIONS, DISTANCES, SCHEMA,
                     SCHEMA_VERSION, ActionSpec, DriveSpec, IntentionSpec, ObservationSpec, Scenario, ScenarioError)
 from .reference import parse_reference
 from .rule_policy import parse_rule_policy
 
 ANY_ACTION = "<action>"  # in OPEN_CHOICES: any action name of the scenario is allowed too
 ANY_ACTION_LIST = "<actions>"  # in OPEN_CHOICES: a list of distinct action names of the scenario
+DRIVE_READINGS = "<drive readings>"  # in OPEN_CHOICES: an object {drive name: one of GROWTH_READINGS}
+# when a drive other than the serving one grows (open choice drive_growth; docs/FIDELITY.md):
+# every tick (Table 4.2), only on ticks the human is not near the robot (Sec 3.3.1, NSoc: "increases
+# when the robot is not interacting with human"), only on ticks whose action changed the robot's
+# location (Sec 3.3.1, NRes: "assumed to increase as robot moves"), or on every tick whose action
+# does not lower it (NSoc "is lowered when the robot chats", NRes: joints heat up "in motion or
+# maintaining certain postures" and cool while resting)
+GROWTH_READINGS = ("always", "human_not_near", "robot_moved", "not_lowered")
 
 # Choices the thesis leaves open, with their defaults and allowed values (a pair of floats =
 # any number in that range; ANY_ACTION = also any action name of the scenario). docs/FIDELITY.md explains each.
@@ -47,6 +55,15 @@ OPEN_CHOICES: dict[str, tuple[Any, Any]] = {
     # actions whose Table 3.3 constraint is dropped (selectable and effective everywhere): a list of
     # action names of the scenario (checked in _check_open)
     "always_valid_actions": ((), ANY_ACTION_LIST),
+    # within a tick, the Table 4.2 time increase comes after the action's and the feedback's effects
+    # (default) or before them; with clamping at 0 and 100 the order matters at the bounds
+    "time_increase": ("after_action", ("after_action", "before_action")),
+    # drives (not the serving one: serving_growth) that grow only on some ticks: {drive: reading}
+    "drive_growth": ({}, DRIVE_READINGS),
+    # when no motivation is activated (every intensity 0, Definition 6): Eq 3.3's argmax still picks one
+    # (ties: tie_break), or there is no dominant motivation, an extra internal state "none" (Sec 3.1.3:
+    # "all activated motivations will compete"; Sec 4.2.3: "a robot without dominant motivation")
+    "no_activated_motivation": ("argmax", ("argmax", "none")),
     # intention recognition (Section 2.3; docs/INTENTION.md): the recogniser and the simulated user
     "intention_threshold": (0.0, (0.0, 1.0)),  # below this posterior the recognised intention is `none`
     "intention_prior_strength": (10.0, (0.0, 1e6)),  # textbook observations each prior CPD column is worth
@@ -277,7 +294,7 @@ def _scenario_from_dict(raw: Any, source: str, overrides: Mapping[str, Any] | No
 
     open_ = dict(raw.get("open", {}))
     open_.update(overrides or {})
-    opens = _check_open(open_, dnames, objects, base_vars, all_vars, anames, where)
+    opens = _check_open(open_, dnames, objects, base_vars, all_vars, anames, where, serving_name, motiv)
     observations = None
     if "observations" in raw:
         observations = _parse_observations(raw["observations"], [NONE_INTENTION] + [i.name for i in intentions], where)
@@ -404,7 +421,7 @@ def _check_learning(learning: dict, where: str) -> None:
         last = s["from"]
 
 
-def _check_open(open_: dict, dnames, objects, base_vars, all_vars, anames, where) -> dict:
+def _check_open(open_: dict, dnames, objects, base_vars, all_vars, anames, where, serving=None, motivations=()) -> dict:
     out = {}
     for key, val in open_.items():
         if key in ("initial_drives", "initial_location", "initial_objects"):
@@ -423,6 +440,13 @@ def _check_open(open_: dict, dnames, objects, base_vars, all_vars, anames, where
                 raise ScenarioError(f"{where}: open.{key} = {val!r} must be a list of distinct action names "
                                     f"({', '.join(sorted(anames))})")
             val = list(val)
+        elif allowed == DRIVE_READINGS:
+            if not isinstance(val, dict) or not all(isinstance(k, str) and k in dnames and k != serving
+                                                    and v in GROWTH_READINGS for k, v in val.items()):
+                others = [d for d in dnames if d != serving]
+                raise ScenarioError(f"{where}: open.{key} = {val!r} must map drive names ({', '.join(others)}; the "
+                                    f"serving drive's is serving_growth) to one of {list(GROWTH_READINGS)}")
+            val = {k: val[k] for k in dnames if k in val}
         elif ANY_ACTION in allowed:
             named = [x for x in allowed if x != ANY_ACTION]
             if not isinstance(val, str) or (val not in named and val not in anames):
@@ -437,6 +461,9 @@ def _check_open(open_: dict, dnames, objects, base_vars, all_vars, anames, where
             raise ScenarioError(f"{where}: open.initial_drives has unknown drive {dn!r}")
         if not isinstance(v, (int, float)) or not 0 <= v <= 100:
             raise ScenarioError(f"{where}: open.initial_drives.{dn} = {v!r} must be in [0, 100]")
+    if out["no_activated_motivation"] == "none" and NO_MOTIVATION in motivations:
+        raise ScenarioError(f"{where}: open.no_activated_motivation = 'none' needs the name {NO_MOTIVATION!r}, "
+                            f"which a motivation already has")
     out["initial_drives"] = [float(init.get(dn, 0.0)) for dn in dnames]
     loc = open_.get("initial_location", all_vars["robot.location"][0])
     if loc not in all_vars["robot.location"]:

@@ -21,6 +21,7 @@ from typing import Mapping
 SCHEMA = "homeo-scenario"
 SCHEMA_VERSION = 1
 NONE_INTENTION = "none"
+NO_MOTIVATION = "none"  # the internal state without a dominant motivation (open choice no_activated_motivation)
 NULL_OBJECT = "null"
 PRESENCE = ("present", "absent")
 RELATIONS = ("near", "far", "absent")
@@ -160,6 +161,18 @@ class Scenario:
         return [d.motivation for d in self.drives]
 
     @property
+    def internal_states(self) -> list[str]:
+        """The values of m_dom (Eq 3.6): the motivations, and ``none`` when the open choice
+        ``no_activated_motivation`` is ``none``."""
+        names = self.motivation_names
+        return names + [NO_MOTIVATION] if self.open.get("no_activated_motivation") == "none" else names
+
+    @property
+    def none_state(self) -> int:
+        """The index of m_dom ``none`` (-1: Eq 3.3's argmax always picks a motivation)."""
+        return len(self.drives) if self.open.get("no_activated_motivation") == "none" else -1
+
+    @property
     def action_names(self) -> list[str]:
         return [a.name for a in self.actions]
 
@@ -188,7 +201,7 @@ class Scenario:
         """Labels of every Q-table axis: what a saved table must agree with."""
         c = self.c
         return {
-            "motivations": self.motivation_names,
+            "motivations": self.internal_states,
             "intentions": self.intention_names,
             "relations": list(RELATIONS),
             "objects": {
