@@ -267,6 +267,10 @@ ALTERNATIVES: list[tuple[str, list]] = [
     ("invalid_actions", ["excluded", "no_effect"]),  # issue 15
     ("always_valid_actions", [[], ["Rest"], ["Chat"], ["Rest", "Chat"]]),  # issue 15
     ("metrics_sample", ["end", "after_action"]),
+    ("time_increase", ["after_action", "before_action"]),  # issue 15, the readings
+    ("drive_growth", [{}, {"NSoc": "human_not_near"}, {"NSoc": "not_lowered"}, {"NRes": "robot_moved"},
+                      {"NRes": "not_lowered"}]),
+    ("no_activated_motivation", ["argmax", "none"]),
     ("initial_drives", [{"NAch": 0, "NSoc": 0, "NRes": 0, "NEng": 0}, {"NAch": 50, "NSoc": 50, "NRes": 50, "NEng": 50},
                         {"NAch": 0, "NSoc": 0, "NRes": 0, "NEng": 90}]),
     ("initial_location", ["R", "H", "C"]),
@@ -308,7 +312,8 @@ def sensitivity(r: Runner, base: dict, seeds: int) -> None:
             m = r.run(_set(base, key, v), seeds)
             mark = " (chosen)" if v == cur else ""
             cells = [fmt(m, c, 3 if c in ("HSR", "RSR") else 2) for c in cols]
-            print(f"| {key} | {_label(v)}{mark} | " + " | ".join(cells) + " |")
+            label = json.dumps(v) if key == "drive_growth" else _label(v)
+            print(f"| {key} | {label}{mark} | " + " | ".join(cells) + " |")
 
 
 # ---------------------------------------------------------------------------
