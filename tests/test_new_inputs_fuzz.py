@@ -273,3 +273,18 @@ def test_a_bridge_checkpoint_with_any_field_changed_restores_whole_or_not_at_all
     except CheckpointError as exc:
         assert "\n" not in str(exc) and len(str(exc)) < 2000
         assert s.log == [] and s.env.tick == 0
+
+
+@FAST
+@given(path=st.text(max_size=30) | st.sampled_from(["", ".", "/", "/proc/x/y", "no/such/dir/f.json", "ok.json"]))
+def test_the_soak_samples_file_is_writable_or_a_one_line_refusal(tmp_path, path):
+    from homeo_launch.soak import check_samples_file
+    from homeo_msgs_py.cli_args import UserError
+
+    full = os.path.join(str(tmp_path), path) if path and not path.startswith("/") else path
+    try:
+        check_samples_file(full or ".")
+    except UserError as exc:
+        assert "\n" not in str(exc) and str(exc).startswith("--samples")
+        return
+    assert not os.path.isdir(full) and os.access(os.path.dirname(os.path.abspath(full)), os.W_OK)

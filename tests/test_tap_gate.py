@@ -7,6 +7,8 @@ from __future__ import annotations
 import json
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from rosgraph import Probe, fresh_domain
 
@@ -68,4 +70,24 @@ def test_without_a_tap_a_robot_writer_sends_once_the_graph_reader_matched(probe)
     pub.publish(json.dumps({"n": 2}))
     assert probe.spin_until(lambda: got, 10.0)
     assert got == [{"n": 2}]
+    node.destroy_node()
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(value=st.integers(-2**63, 2**63 - 1) | st.text(max_size=20) | st.floats(allow_nan=False) | st.booleans())
+def test_extra_readers_at_start_is_in_range_or_a_one_line_refusal(probe, value):
+    """A bad value is rclpy's ParameterException, which ``run_node`` prints on one line (exit 2)."""
+    from rclpy.exceptions import ParameterException
+
+    from homeo_msgs_py.node_base import config_error_line
+
+    try:
+        node = _robot_node(probe, extra=value)
+    except ParameterException as exc:
+        line = config_error_line(exc)
+        assert "extra_readers" in line and "\n" not in line
+        assert not (type(value) is int and 0 <= value <= 100)
+        return
+    assert type(value) is int and 0 <= value <= 100 and node.extra_readers == value
+    probe.ex.remove_node(node)
     node.destroy_node()

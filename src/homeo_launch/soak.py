@@ -469,6 +469,22 @@ def format_fresh(fr: dict) -> list[str]:
     return lines
 
 
+def check_samples_file(path: str) -> None:
+    """``--samples FILE`` can be written: not a directory, in a writable directory; else UserError."""
+    from homeo_msgs_py.cli_args import UserError
+    from homeo_msgs_py.schemas import one_line
+
+    shown = one_line(path)
+    if "\0" in path:
+        raise UserError(f"--samples {shown}: not a file name")
+    p = Path(path)
+    if p.is_dir():
+        raise UserError(f"--samples {shown} is a directory, not a file")
+    parent = p.absolute().parent
+    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
+        raise UserError(f"--samples {shown}: {one_line(str(parent))} is not a writable directory")
+
+
 def cmd_soak(a) -> int:
     from homeo_msgs_py.cli_args import UserError
 
@@ -479,6 +495,8 @@ def cmd_soak(a) -> int:
         raise UserError(f"--fresh {a.fresh}: at most a tenth of --ticks (the late one must fit in the last tenth)")
     if a.fresh_domain is not None and a.fresh_domain > 232:
         raise UserError(f"--fresh-domain {a.fresh_domain}: a ROS domain id is at most 232")
+    if a.samples:
+        check_samples_file(a.samples)  # before the hours of the soak, not after them
     out = {}
     bar = None
     if not a.quiet:

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import os
 
+from .schemas import one_line
+
 DEFAULT = "out"
 ENV = "HOMEO_DATA_DIR"
 
@@ -33,13 +35,8 @@ def resolve(data_dir: str, path: str, what: str = "path") -> str:
     base = os.path.realpath(data_dir)
     full = os.path.realpath(os.path.join(base, os.path.expanduser(path)))
     if full == base or os.path.commonpath([base, full]) != base:
-        raise OutsideDataDir(f"{what} {_shown(path)} is outside the data directory {_shown(base)}")
+        raise OutsideDataDir(f"{what} {one_line(path)} is outside the data directory {one_line(base)}")
     return full
-
-
-def _shown(name: str) -> str:
-    """A file name as a reason shows it: on one line, control characters escaped."""
-    return name if name.isprintable() else repr(name)
 
 
 def options_inside(data_dir: str, named) -> None:

@@ -21,7 +21,7 @@ from .auth import AuthError, load_signer
 from .diagnostics import RejectLog
 from .graph import DIAGNOSTICS, LAUNCHER, NODES, RECORDER, SIGNED, TOPICS, min_readers, own_endpoints
 from .qos import pub_qos, quiet_pub_events, quiet_sub_events, sub_qos
-from .schemas import Message, Rejected, Vocabulary, decode, encode
+from .schemas import Message, Rejected, Vocabulary, decode, encode, one_line
 
 DIAG_PERIOD_S = 1.0
 
@@ -233,6 +233,11 @@ def _die_with_parent() -> None:
         pass
 
 
+def config_error_line(exc: Exception) -> str:
+    """What a node prints for a bad start-up configuration: one line, whatever value was given."""
+    return "error: " + one_line(str(exc).strip())
+
+
 def run_node(factory: Callable[[], Node], args=None, config_errors: tuple = ()) -> int:
     """Build the node, spin until Ctrl-C / SIGTERM / shutdown, always destroy it and shut down.
     ``config_errors``: more exception types that mean a bad start-up configuration (exit 2)."""
@@ -248,7 +253,7 @@ def run_node(factory: Callable[[], Node], args=None, config_errors: tuple = ()) 
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except (NodeConfigError, ParameterException, *config_errors) as exc:  # bad start-up configuration
-        print(f"error: {exc}", file=sys.stderr)
+        print(config_error_line(exc), file=sys.stderr)
         code = 2
     finally:
         if node is not None:

@@ -337,6 +337,12 @@ def finite(obj):
     return obj
 
 
+def one_line(text: str) -> str:
+    """``text`` as a reason shows a value someone else chose: on one line, control characters
+    (line breaks among them) escaped."""
+    return text if text.isprintable() else "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+
+
 def short(text: str, limit: int = MAX_REASON) -> str:
     """A reason cut to ``limit`` characters, printable: what a sender put in it cannot flood
     /diagnostics or the log, nor break their encoding (lone surrogates become escapes)."""
