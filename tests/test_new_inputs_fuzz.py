@@ -10,6 +10,7 @@ import argparse
 import copy
 import json
 import os
+from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, example, given, settings
@@ -288,3 +289,36 @@ def test_the_soak_samples_file_is_writable_or_a_one_line_refusal(tmp_path, path)
         assert "\n" not in str(exc) and str(exc).startswith("--samples")
         return
     assert not os.path.isdir(full) and os.access(os.path.dirname(os.path.abspath(full)), os.W_OK)
+
+
+def _joint_search():
+    """``tools/joint_search.py`` (a tool, not a package; it imports no Optuna until a search runs)."""
+    import importlib
+    import sys
+
+    tools = str(Path(__file__).resolve().parents[1] / "tools")
+    if tools not in sys.path:
+        sys.path.insert(0, tools)
+    return importlib.import_module("joint_search")
+
+
+@FAST
+@given(lines=st.lists(st.text(max_size=40) | JSON.map(json.dumps), max_size=4))
+def test_a_trials_file_of_an_earlier_search_is_read_or_a_one_line_refusal(tmp_path, lines):
+    """``tools/calibrate.py --joint --resume-from / --confirm-from`` (our own JSON-lines format, written
+    by ``joint_search.run``): any content is trials or one line and exit 2, never a traceback."""
+    joint_search = _joint_search()
+    f = tmp_path / "trials.jsonl"
+    f.write_text("\n".join(lines), encoding="utf-8", errors="surrogatepass")
+    try:
+        got = joint_search.read_trials(str(f))
+    except joint_search.TrialsFileError as exc:
+        assert "\n" not in str(exc) and str(exc).startswith(str(f))
+        return
+    assert all(isinstance(e["open"], dict) and isinstance(e["score"], float) for e in got)
+
+
+def test_the_trials_files_in_the_repo_are_read_whole():
+    joint_search = _joint_search()
+    docs = Path(__file__).resolve().parents[1] / "docs" / "calibration"
+    assert len(joint_search.read_trials(f"{docs / 'joint-trials.jsonl'},{docs / 'joint-trials-2.jsonl'}")) == 256

@@ -518,12 +518,16 @@ def main(argv=None) -> int:
         import joint_search
 
         w = min(a.workers, 1) if a.workers else 1  # one process: the machine is shared
-        if a.confirm_from:
-            joint_search.confirm_from(a.confirm_from, a.search_seeds, a.confirm_seeds, a.confirm_best, a.sampler_seed,
-                                      a.out, workers=w)
-        else:
-            joint_search.run(a.trials, a.search_seeds, a.confirm_seeds, a.confirm_best, a.sampler_seed, a.out, workers=w,
-                             resume_from=a.resume_from)
+        try:
+            if a.confirm_from:
+                joint_search.confirm_from(a.confirm_from, a.search_seeds, a.confirm_seeds, a.confirm_best,
+                                          a.sampler_seed, a.out, workers=w)
+            else:
+                joint_search.run(a.trials, a.search_seeds, a.confirm_seeds, a.confirm_best, a.sampler_seed, a.out,
+                                 workers=w, resume_from=a.resume_from)
+        except joint_search.TrialsFileError as exc:
+            print(f"calibrate: {exc}", file=sys.stderr)
+            return 2
         return 0
     if not (a.search or a.table or a.trends or a.sensitivity or a.curves or a.probe_record_point):
         a.table = a.trends = a.sensitivity = True

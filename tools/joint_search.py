@@ -250,6 +250,7 @@ def run(trials: int, search_seeds: str, confirm_seeds: str, n_confirm: int, samp
     s_seeds, c_seeds = _seeds(search_seeds), _seeds(confirm_seeds)
     if set(s_seeds) & set(c_seeds):
         raise SystemExit("calibrate.py: error: --search-seeds and --confirm-seeds overlap")
+    earlier = read_trials(resume_from) if resume_from else []  # a bad file stops us before any output is cut
     outp = Path(out)
     outp.mkdir(parents=True, exist_ok=True)
     log = (outp / "trials.jsonl").open("w")
@@ -260,13 +261,7 @@ def run(trials: int, search_seeds: str, confirm_seeds: str, n_confirm: int, samp
     evals: list[dict] = []
     if resume_from:
         space = _space(optuna)
-        for line in Path(resume_from).read_text().splitlines():
-            if not line.strip():
-                continue
-            e = json.loads(line)
-            e["open"] = _with_defaults(e["open"])
-            e["text_distance"] = text_distance(e["open"])
-            e["score"] = score(e)
+        for e in earlier:
             p = _params(e["open"])
             for k, dist in space.items():  # snap floats onto the grid (JSON round trips)
                 if isinstance(dist, optuna.distributions.FloatDistribution) and dist.step:
@@ -301,17 +296,41 @@ def run(trials: int, search_seeds: str, confirm_seeds: str, n_confirm: int, samp
     return confirm(evals, time.time() - t0, trials, s_seeds, c_seeds, n_confirm, sampler_seed, outp, workers)
 
 
+class TrialsFileError(ValueError):
+    """A trials file that cannot be read (``str()``: one line)."""
+
+
+def read_trials(paths: str) -> list[dict]:
+    """The trials of one or more (comma-separated) ``trials.jsonl`` files of earlier searches, each
+    completed with the current defaults and scored as this search scores; TrialsFileError if any
+    file or line cannot be."""
+    evals = []
+    for path in paths.split(","):
+        try:
+            lines = Path(path).read_text().splitlines()
+        except (OSError, UnicodeDecodeError) as exc:
+            raise TrialsFileError(f"{path}: {getattr(exc, 'strerror', None) or exc}") from None
+        for n, line in enumerate(lines, 1):
+            if not line.strip():
+                continue
+            try:
+                e = json.loads(line)
+                e["open"] = _with_defaults(e["open"])
+                e["text_distance"] = text_distance(e["open"])
+                e["score"] = score(e)
+                _params(e["open"])
+            except (ValueError, KeyError, TypeError, AttributeError) as exc:
+                raise TrialsFileError(f"{path}:{n}: not a trial of this search ({type(exc).__name__}: "
+                                      f"{str(exc)[:80]})".replace("\n", " ")) from None
+            evals.append(e)
+    return evals
+
+
 def confirm_from(path: str, search_seeds: str, confirm_seeds: str, n_confirm: int, sampler_seed: int, out: str,
                  workers: int = 1) -> dict:
     """The confirmation stage alone, from a search's ``trials.jsonl`` (e.g. a search stopped early:
     with the same sampler seed its first N trials are those of ``--trials N``)."""
-    evals = []
-    for p in path.split(","):  # several files: an earlier search and its resumption
-        evals += [json.loads(line) for line in Path(p).read_text().splitlines() if line.strip()]
-    for e in evals:
-        e["open"] = _with_defaults(e["open"])
-        e["text_distance"] = text_distance(e["open"])
-        e["score"] = score(e)
+    evals = read_trials(path)
     outp = Path(out)
     outp.mkdir(parents=True, exist_ok=True)
     return confirm(evals, None, len(evals), _seeds(search_seeds), _seeds(confirm_seeds), n_confirm, sampler_seed,
