@@ -8,6 +8,7 @@ import json
 import os
 import time
 from contextlib import contextmanager
+from pathlib import Path
 
 from homeo_launch.processes import dds_defaults
 
@@ -96,6 +97,28 @@ class Probe:
     def close(self):
         self.node.destroy_node()
         self.rclpy.try_shutdown(context=self.ctx)
+
+
+def child_pid(parent: int, module: str) -> int | None:
+    """The pid of ``parent``'s child process running ``python -m module``."""
+    for d in Path("/proc").iterdir():
+        if not d.name.isdigit():
+            continue
+        try:
+            ppid = int((d / "stat").read_text().rsplit(")", 1)[1].split()[1])
+            cmd = (d / "cmdline").read_bytes().split(b"\0")
+        except (OSError, IndexError, ValueError):
+            continue
+        if ppid == parent and module.encode() in cmd:
+            return int(d.name)
+    return None
+
+
+def failure_report(proc, out: str, err: str, logs: Path) -> str:
+    """What the next person needs when a launched graph test fails: the launcher's exit code and
+    output, and the end of every node's log under ``logs``."""
+    return f"exit {proc.returncode}\nstdout: {(out or '')[-1500:]}\nstderr: {(err or '')[-3000:]}\n" + "\n".join(
+        f"--- {f.name}\n{f.read_text(errors='replace')[-2500:]}" for f in sorted(logs.rglob("*.log")))
 
 
 @contextmanager

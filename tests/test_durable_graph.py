@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from rosgraph import Probe, fresh_domain
+from rosgraph import Probe, child_pid, failure_report, fresh_domain
 
 from homeo_decision import checkpoint
 from homeo_decision.agent import DecisionCore
@@ -30,21 +30,6 @@ def _launch(*args, domain: int) -> subprocess.Popen:
     """``homeo-launch sim`` with its data directory the test's own (the checkpoint folder is in it)."""
     return subprocess.Popen([sys.executable, "-m", "homeo_launch.cli", "sim", "--quiet", *args],
                             env=graph_env(domain), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-
-
-def _child(parent: int, module: str) -> int | None:
-    """The pid of the launcher's child running ``python -m module``."""
-    for d in Path("/proc").iterdir():
-        if not d.name.isdigit():
-            continue
-        try:
-            ppid = int((d / "stat").read_text().rsplit(")", 1)[1].split()[1])
-            cmd = (d / "cmdline").read_bytes().split(b"\0")
-        except (OSError, IndexError, ValueError):
-            continue
-        if ppid == parent and module.encode() in cmd:
-            return int(d.name)
-    return None
 
 
 def _wait_ticks(path: Path, ticks: int, proc: subprocess.Popen, bound: float = 120.0) -> None:
@@ -93,10 +78,10 @@ def test_a_node_killed_mid_run_is_restarted_from_its_checkpoint_and_the_run_comp
     try:
         path = ck_dir / f"{node}.json"
         _wait_ticks(path, 100, p)
-        pid = _child(p.pid, MODULES[node])
+        pid = child_pid(p.pid, MODULES[node])
         assert pid is not None
         os.kill(pid, signal.SIGKILL)
-        while Path(f"/proc/{pid}").exists() and _child(p.pid, MODULES[node]) == pid:
+        while Path(f"/proc/{pid}").exists() and child_pid(p.pid, MODULES[node]) == pid:
             time.sleep(0.01)
         last = json.loads(path.read_text())  # the last checkpoint the killed process wrote
         # the launcher says it on /diagnostics
@@ -131,11 +116,11 @@ def test_a_node_that_keeps_dying_stops_the_graph_with_one_line(tmp_path):
         end = time.monotonic() + 120
         killed = 0
         while killed < 2 and time.monotonic() < end:
-            pid = _child(p.pid, MODULES["homeo_decision"])
+            pid = child_pid(p.pid, MODULES["homeo_decision"])
             if pid is not None and (tmp_path / "ck").exists():
                 os.kill(pid, signal.SIGKILL)
                 killed += 1
-                while _child(p.pid, MODULES["homeo_decision"]) == pid:
+                while child_pid(p.pid, MODULES["homeo_decision"]) == pid:
                     time.sleep(0.01)
             time.sleep(0.2)
         out, err = p.communicate(timeout=60)
@@ -204,10 +189,10 @@ def test_the_drives_node_killed_mid_run_is_restarted_and_the_run_completes(tmp_p
     last = None
     try:
         _wait_ticks(ck_dir / "homeo_decision.json", 100, p)
-        pid = _child(p.pid, "homeo_decision.drives_node")
+        pid = child_pid(p.pid, "homeo_decision.drives_node")
         assert pid is not None, "no drives node process found"
         os.kill(pid, signal.SIGKILL)
-        while Path(f"/proc/{pid}").exists() and _child(p.pid, "homeo_decision.drives_node") == pid:
+        while Path(f"/proc/{pid}").exists() and child_pid(p.pid, "homeo_decision.drives_node") == pid:
             time.sleep(0.01)
         last = checkpoint.load(ck_dir / "homeo_drives.slots", "homeo_drives")  # what the killed process left
         out, err = p.communicate(timeout=240)
@@ -216,8 +201,7 @@ def test_the_drives_node_killed_mid_run_is_restarted_and_the_run_completes(tmp_p
             p.kill()
             out, err = p.communicate()
         # on failure, everything the next person needs: the launcher's output and each node's log
-        report = f"exit {p.returncode}\nstdout: {out[-1500:]}\nstderr: {err[-3000:]}\n" + "\n".join(
-            f"--- {f.name}\n{f.read_text(errors='replace')[-2500:]}" for f in sorted(logs.glob("*.log")))
+        report = failure_report(p, out, err, logs)
     assert p.returncode == 0, report
     res = json.loads(out)
     assert res["restarts"] == {"homeo_drives": 1} and res["iterations"] == n, report
@@ -270,7 +254,7 @@ def test_the_world_node_killed_mid_run_goes_on_with_the_same_run_and_counts_the_
     try:
         path = ck_dir / "homeo_sim.json"
         _wait_ticks(path, 100, p)
-        pid = _child(p.pid, "homeo_sim.node")
+        pid = child_pid(p.pid, "homeo_sim.node")
         assert pid is not None
         os.kill(pid, signal.SIGKILL)
         last = json.loads(path.read_text())  # the killed process's last checkpoint

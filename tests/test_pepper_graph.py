@@ -15,7 +15,7 @@ import pytest
 
 qi = pytest.importorskip("qi")
 
-from rosgraph import Probe, fresh_domain  # noqa: E402
+from rosgraph import Probe, child_pid, failure_report, fresh_domain  # noqa: E402
 
 from homeo_launch.pepper import pepper_specs  # noqa: E402
 from homeo_launch.processes import Graph, graph_env  # noqa: E402
@@ -307,7 +307,8 @@ def test_the_bridge_killed_mid_session_is_restarted_and_the_session_completes(tm
                 pass
             time.sleep(0.1)
         assert last is not None and last["ticks"] >= 4, "the bridge never checkpointed 4 interactions"
-        pid = next(int(c) for c in os.listdir("/proc") if c.isdigit() and _is_child(int(c), p.pid, "pepper_bridge.node"))
+        pid = child_pid(p.pid, "pepper_bridge.node")
+        assert pid is not None, "the bridge process was not found"
         os.kill(pid, signal.SIGKILL)
         last = checkpoint.load(path, "pepper_bridge")
         out, err = p.communicate(timeout=240)
@@ -315,8 +316,7 @@ def test_the_bridge_killed_mid_session_is_restarted_and_the_session_completes(tm
         if p.poll() is None:
             p.kill()
             out, err = p.communicate()
-        report = f"exit {p.returncode}\nstderr: {err[-3000:]}\n" + "\n".join(
-            f"--- {f.name}\n{f.read_text(errors='replace')[-2500:]}" for f in sorted(logs.rglob("*.log")))
+        report = failure_report(p, out, err, logs)
     assert p.returncode == 0, report
     res = json.loads(out)
     assert res["restarts"] == {"pepper_bridge": 1}, report
@@ -329,15 +329,6 @@ def test_the_bridge_killed_mid_session_is_restarted_and_the_session_completes(tm
     assert "going on with run 0 at tick" in bridge_log, report
 
 
-def _is_child(pid: int, parent: int, module: str) -> bool:
-    try:
-        with open(f"/proc/{pid}/stat") as fh:
-            ppid = int(fh.read().rsplit(")", 1)[1].split()[1])
-        with open(f"/proc/{pid}/cmdline", "rb") as fh:
-            cmd = fh.read().split(b"\0")
-    except (OSError, IndexError, ValueError):
-        return False
-    return ppid == parent and module.encode() in cmd
 
 
 def test_pepper_resume_goes_on_with_the_robot_nodes_learning(tmp_path):
