@@ -27,9 +27,9 @@ def test_table_4_5_targets_over_20_seeds():
     m = json.loads(proc.stdout)["metrics"]
     assert m["HSR"]["mean"] >= 0.78
     # issue 2 asked RSR >= 0.85. Issue 15's open block (docs/FIDELITY.md, "Joint search") gives up some RSR
-    # for Table 4.5 as a whole (2 -> 5 of 12 numbers inside the interval) and the text's statements
-    # (5 -> 10 of 10): measured 0.818 [0.777, 0.859] over seeds 0-19 (0.815 on the confirmation seeds
-    # 200-219), against 0.859 before. The bound guards that level; the thesis's 0.90 stays unreached.
+    # for Table 4.5 as a whole (2 -> 4-6 of 12 numbers inside the interval, by seed set) and the text's
+    # statements (5 -> 10 of 10): measured 0.825 [0.796, 0.854] over seeds 0-19 (0.817 on the confirmation
+    # seeds 200-219), against 0.859 before. The bound guards that level; the thesis's 0.90 stays unreached.
     assert m["RSR"]["mean"] >= 0.78
     assert m["CEDA"]["all"]["mean"] <= 6.0
     assert m["CDA"]["NAch"]["mean"] <= 5.0
@@ -37,8 +37,10 @@ def test_table_4_5_targets_over_20_seeds():
 
 def test_issue_15_fidelity_on_held_out_seeds():
     # issue 15: the Table 4.5 numbers inside our 95% interval, on the 20 confirmation seeds that the joint
-    # search never used (homeo-sim run --seeds 20 --first-seed 200). Measured: 5 of 12 (CDA NAch, CDA NRes,
-    # CEDA NAch, CEDA NSoc, CEDA NRes); the issue's goal of 6 was not reached (docs/FIDELITY.md).
+    # search and its validation never used (homeo-sim run --seeds 20 --first-seed 200). Measured: 6 of 12
+    # (CDA NAch, CDA NRes, CDA all, CEDA NAch, CEDA NSoc, CEDA NRes); the issue asks at least 6. Other
+    # sets of 20 seeds give 4 to 6 (docs/FIDELITY.md, "Third stage"): this guards the confirmation itself.
+    # (The same six on seeds 0-19.)
     from homeo_decision.scenario import load_scenario
     from homeo_sim.report.fidelity import table_score
 
@@ -48,7 +50,7 @@ def test_issue_15_fidelity_on_held_out_seeds():
     out = json.loads(proc.stdout)
     assert out["seeds"] == list(range(200, 220))
     rows = table_score(out["metrics"], load_scenario().reference.metrics)
-    assert sum(r["inside"] for r in rows) >= 5, [(r["metric"], r["inside"]) for r in rows]
+    assert sum(r["inside"] for r in rows) >= 6, [(r["metric"], r["inside"]) for r in rows]
 
 
 def _mean(cfg: RunConfig, seeds=range(10)) -> dict:

@@ -32,21 +32,35 @@ def run_pair(script, seed, qtables, thesis):
             for label, dod in field.DODS]
 
 
+# Q-tables trained on several seeds: with one training seed the comparison is one draw of two Q-tables
+# (issue 15, third stage: trained on seed 0 alone, the two robots tied 39 to 39 over sessions 0-2 with the
+# adopted block; over training seeds 0-5 x sessions 0-2 the dedicated robot satisfied 241 against 227,
+# and 241/229 and 238/229 with the proposal probability at 0.9 and 0.8: docs/PEPPER.md)
+TRAIN_SEEDS = (0, 1, 2)
+
+
+@pytest.fixture(scope="module")
+def qtables_by_seed(tmp_path_factory):
+    d = tmp_path_factory.mktemp("qs")
+    return {t: {label: str(field.train_q(d / f"{label}-{t}.json", dod, seed=t)) for label, dod in field.DODS}
+            for t in TRAIN_SEEDS}
+
+
 @pytest.mark.slow
-def test_dedicated_satisfies_more_and_selfish_charges_earlier(qtables, thesis):
+def test_dedicated_satisfies_more_and_selfish_charges_earlier(qtables_by_seed, thesis):
     script = load_script("field_user.json")
     n = len(script["interactions"])
     sat = {"dedicated": 0, "selfish": 0}
     attach = {"dedicated": 0, "selfish": 0}
-    for seed in SEEDS:
-        for res in run_pair(script, seed, qtables, thesis):
-            s = res.summary()
-            assert s["intentions"] == n - 2  # two pauses
-            sat[res.label] += s["satisfied"]
-            # never = one late mark, the same for both robots (it was the run's own length + 1, which differs
-            # between the two robots' runs: with issue 15's open block, where in 2 of the 3 seeds neither robot
-            # plugs in within the session, that difference alone decided the comparison)
-            attach[res.label] += s["first_attach"] or NEVER
+    for tables in qtables_by_seed.values():
+        for seed in SEEDS:
+            for res in run_pair(script, seed, tables, thesis):
+                s = res.summary()
+                assert s["intentions"] == n - 2  # two pauses
+                sat[res.label] += s["satisfied"]
+                # never = one late mark, the same for both robots (it was the run's own length + 1, which
+                # differs between the two robots' runs and alone decided the comparison when neither plugs in)
+                attach[res.label] += s["first_attach"] or NEVER
     assert sat["dedicated"] > sat["selfish"], sat
     assert attach["selfish"] < attach["dedicated"], attach
 

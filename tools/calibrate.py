@@ -510,6 +510,13 @@ def main(argv=None) -> int:
                     help="--joint: skip the search, confirm the best points of this trials.jsonl")
     ap.add_argument("--resume-from", metavar="TRIALS.jsonl", default=None,
                     help="--joint: start the study with the trials of an earlier search (docs/calibration/joint-trials.jsonl)")
+    ap.add_argument("--refine", action="store_true",
+                    help="--joint: the current default's one-step neighbours and the best moves combined, chosen on "
+                         "--validate-seeds, the best --confirm-best confirmed on --confirm-seeds")
+    ap.add_argument("--validate-seeds", default="300-319", metavar="E-F", help="--refine: seeds of the choice (default 300-319)")
+    ap.add_argument("--validate-best", type=int, default=0,
+                    help="--joint: re-rank this many best search points on --validate-seeds before the confirmation")
+    ap.add_argument("--combine", type=int, default=3, help="--refine: best single moves combined (default 3)")
     ap.add_argument("--out", default="calibrate-joint", help="--joint: directory for trials.jsonl and joint.json")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                     help="start from the chosen configuration with this change (JSON value)")
@@ -517,14 +524,17 @@ def main(argv=None) -> int:
     if a.joint:
         import joint_search
 
-        w = min(a.workers, 1) if a.workers else 1  # one process: the machine is shared
+        # --workers processes run the seeds of one point (the search's trials stay sequential)
+        w = max(a.workers, 1)
         try:
-            if a.confirm_from:
+            if a.refine:
+                joint_search.refine(a.validate_seeds, a.confirm_seeds, a.confirm_best, a.combine, a.out, workers=w)
+            elif a.confirm_from:
                 joint_search.confirm_from(a.confirm_from, a.search_seeds, a.confirm_seeds, a.confirm_best,
-                                          a.sampler_seed, a.out, workers=w)
+                                          a.sampler_seed, a.out, workers=w, validate=(a.validate_seeds, a.validate_best))
             else:
                 joint_search.run(a.trials, a.search_seeds, a.confirm_seeds, a.confirm_best, a.sampler_seed, a.out,
-                                 workers=w, resume_from=a.resume_from)
+                                 workers=w, resume_from=a.resume_from, validate=(a.validate_seeds, a.validate_best))
         except joint_search.TrialsFileError as exc:
             print(f"calibrate: {exc}", file=sys.stderr)
             return 2
