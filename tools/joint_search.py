@@ -280,21 +280,28 @@ def run(trials: int, search_seeds: str, confirm_seeds: str, n_confirm: int, samp
 
     def objective(trial):
         o = suggest(trial, start)
-        e = evaluate(o, s_seeds, scale_to=len(c_seeds), workers=workers)
-        e.pop("fidelity")
-        e["trial"] = trial.number
-        evals.append(e)
-        log.write(json.dumps(e) + "\n")
-        log.flush()
-        print(f"trial {trial.number:4d}: score {e['score']:6.2f}  inside {e['inside']:2d}/12  met {e['met']:2d}/10  "
-              f"trends {e['trends']}/6  text {e['text_distance']}  HSR {e['HSR']:.3f} RSR {e['RSR']:.3f}  "
-              f"({time.time() - t0:.0f} s)", file=sys.stderr, flush=True)
-        return e["score"]
+        return _scored(o, s_seeds, len(c_seeds), workers, trial.number, evals, log, t0, "trial")["score"]
 
     study.optimize(objective, n_trials=trials)
     log.close()
     return confirm(evals, time.time() - t0, trials, s_seeds, c_seeds, n_confirm, sampler_seed, outp, workers,
                    _validation(validate, s_seeds, c_seeds))
+
+
+def _scored(o: dict, seeds: list[int], n_to: int, workers: int, number: int, evals: list, log, t0: float,
+            what: str, label: str = "") -> dict:
+    """One point scored on ``seeds`` (intervals rescaled to ``n_to`` seeds), numbered, kept in ``evals``,
+    written to ``log`` and reported on one progress line."""
+    e = evaluate(o, seeds, scale_to=n_to, workers=workers)
+    e.pop("fidelity")
+    e["trial"] = number
+    evals.append(e)
+    log.write(json.dumps(e) + "\n")
+    log.flush()
+    print(f"{what} {number:4d}: score {e['score']:6.2f}  inside {e['inside']:2d}/12  met {e['met']:2d}/10  "
+          f"trends {e['trends']}/6  text {e['text_distance']}  HSR {e['HSR']:.3f} RSR {e['RSR']:.3f}  "
+          f"{label + '  ' if label else ''}({time.time() - t0:.0f} s)", file=sys.stderr, flush=True)
+    return e
 
 
 class TrialsFileError(ValueError):
@@ -473,16 +480,7 @@ def refine(validate_seeds: str, confirm_seeds: str, n_confirm: int, combine: int
     start, t0, evals = current_open(), time.time(), []
 
     def run_point(o, label):
-        e = evaluate(o, v_seeds, scale_to=len(c_seeds), workers=workers)
-        e.pop("fidelity")
-        e["trial"] = len(evals)
-        evals.append(e)
-        log.write(json.dumps(e) + "\n")
-        log.flush()
-        print(f"point {e['trial']:3d}: score {e['score']:6.2f}  inside {e['inside']:2d}/12  met {e['met']:2d}/10  "
-              f"trends {e['trends']}/6  text {e['text_distance']}  HSR {e['HSR']:.3f} RSR {e['RSR']:.3f}  {label}  "
-              f"({time.time() - t0:.0f} s)", file=sys.stderr, flush=True)
-        return e
+        return _scored(o, v_seeds, len(c_seeds), workers, len(evals), evals, log, t0, "point", label)
 
     base = run_point(start, "(the current default)")
     singles = [run_point(o, diff(o, start)) for o in neighbours(start)]
