@@ -271,8 +271,10 @@ def test_field_test_through_the_graph_matches_the_in_process_driver(tmp_path):
         ref = run_field("field_user.json", dod, 0, q[label], label=label)
         assert [[x[c] for c in cols] for x in got["log"]] == [[x[c] for c in cols] for x in ref.log], label
         assert got["summary"]["satisfied"] == ref.summary()["satisfied"]
-    ded, sel = (x["summary"] for x in robots)
-    assert ded["satisfied"] > sel["satisfied"]
+    # which robot satisfies more is not asked of one session with Q-tables of one training seed (with issue
+    # 15's third-stage block this session ties, 12 to 12): tests/test_pepper_field.py compares the two over
+    # Q-tables of three training seeds and three sessions each
+    assert [x["summary"]["label"] for x in robots] == ["dedicated", "selfish"]
 
 
 @pytest.mark.slow
