@@ -60,3 +60,38 @@ def test_heldout_check_refuses_a_bad_input_on_one_line(args, says):
     assert proc.returncode == 2 and proc.stdout == ""
     err = proc.stderr.strip().splitlines()
     assert says in err[-1] and "Traceback" not in proc.stderr
+
+
+from hypothesis import given, settings, strategies as st  # noqa: E402
+
+
+@settings(max_examples=200, deadline=None)
+@given(spec=st.text(max_size=12) | st.from_regex(r"\A-?[0-9]{1,3}(-[0-9]{0,3})?\Z"))
+def test_a_seed_set_is_a_range_or_a_one_line_refusal(spec):
+    """--search-seeds / --confirm-seeds / --validate-seeds and heldout_check's sets (our own A-B form)."""
+    j = _tool("joint_search")
+    try:
+        got = j._seeds(spec)
+    except j.SeedSetError as exc:
+        assert "\n" not in str(exc)
+        return
+    a, _, b = spec.partition("-")
+    assert got == list(range(int(a), int(b or a) + 1)) and got and got[0] >= 0
+
+
+@pytest.mark.parametrize("spec, want", [("3", [3]), ("2-4", [2, 3, 4]), ("4-2", None), ("-1", None), ("a-b", None),
+                                        ("1-", None), ("", None), ("1-2-3", None)])
+def test_seed_sets_by_hand(spec, want):
+    j = _tool("joint_search")
+    if want is None:
+        with pytest.raises(j.SeedSetError):
+            j._seeds(spec)
+    else:
+        assert j._seeds(spec) == want
+
+
+def test_calibrate_refuses_a_bad_seed_set_on_one_line():
+    proc = subprocess.run([sys.executable, str(TOOLS / "calibrate.py"), "--joint", "--refine", "--validate-seeds", "9-1"],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert proc.stderr.strip().splitlines() == ["calibrate: not a seed set A-B with 0 <= A <= B: '9-1'"]

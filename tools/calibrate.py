@@ -535,7 +535,7 @@ def main(argv=None) -> int:
             else:
                 joint_search.run(a.trials, a.search_seeds, a.confirm_seeds, a.confirm_best, a.sampler_seed, a.out,
                                  workers=w, resume_from=a.resume_from, validate=(a.validate_seeds, a.validate_best))
-        except joint_search.TrialsFileError as exc:
+        except (joint_search.TrialsFileError, joint_search.SeedSetError) as exc:
             print(f"calibrate: {exc}", file=sys.stderr)
             return 2
         return 0

@@ -35,8 +35,8 @@ def main(argv=None) -> int:
         sets = [j._seeds(s) for s in a.seed_sets]
         changes = [dict((kv.split("=", 1)[0], json.loads(kv.split("=", 1)[1])) for kv in c.split(","))
                    for c in a.change] or list(CHANGES)
-    except (ValueError, IndexError) as exc:
-        ap.error(f"bad seed set or change: {exc}")
+    except (ValueError, IndexError) as exc:  # SeedSetError, a change without "=" or with bad JSON
+        ap.error(f"bad seed set or change: {str(exc)[:120]}".replace("\n", " "))
     start = j.current_open()
     bad = [k for c in changes for k in c if k not in start]
     if bad:

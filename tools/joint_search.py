@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import sys
 import time
 from dataclasses import replace
@@ -197,9 +198,17 @@ def _distributions(trial) -> dict:
     return dict(trial.distributions)
 
 
+class SeedSetError(ValueError):
+    """A seed set that is not ``A-B`` or ``A`` with 0 <= A <= B (``str()``: one line)."""
+
+
 def _seeds(spec: str) -> list[int]:
-    a, _, b = spec.partition("-")
-    return list(range(int(a), int(b or a) + 1))
+    """``A-B`` (or ``A``) as the seeds A..B; SeedSetError for anything else."""
+    m = re.fullmatch(r"\s*(\d+)\s*(?:-\s*(\d+)\s*)?", spec, re.ASCII)
+    lo, hi = (int(m[1]), int(m[2] or m[1])) if m else (0, -1)
+    if hi < lo:
+        raise SeedSetError(f"not a seed set A-B with 0 <= A <= B: {spec!r}"[:120].replace("\n", " "))
+    return list(range(lo, hi + 1))
 
 
 def current_open() -> dict:
@@ -250,6 +259,7 @@ def run(trials: int, search_seeds: str, confirm_seeds: str, n_confirm: int, samp
     s_seeds, c_seeds = _seeds(search_seeds), _seeds(confirm_seeds)
     if set(s_seeds) & set(c_seeds):
         raise SystemExit("calibrate.py: error: --search-seeds and --confirm-seeds overlap")
+    validation = _validation(validate, s_seeds, c_seeds)  # a bad set stops us before the search, not after it
     earlier = read_trials(resume_from) if resume_from else []  # a bad file stops us before any output is cut
     outp = Path(out)
     outp.mkdir(parents=True, exist_ok=True)
@@ -285,7 +295,7 @@ def run(trials: int, search_seeds: str, confirm_seeds: str, n_confirm: int, samp
     study.optimize(objective, n_trials=trials)
     log.close()
     return confirm(evals, time.time() - t0, trials, s_seeds, c_seeds, n_confirm, sampler_seed, outp, workers,
-                   _validation(validate, s_seeds, c_seeds))
+                   validation)
 
 
 def _scored(o: dict, seeds: list[int], n_to: int, workers: int, number: int, evals: list, log, t0: float,
