@@ -31,12 +31,14 @@ def _run(module: str, *args, env=None, timeout=180.0):
                           env=env, timeout=timeout)
 
 
-@pytest.fixture(scope="module")
-def recorded(tmp_path_factory):
+@pytest.fixture(scope="module", params=["writers", "tap"])
+def recorded(request, tmp_path_factory):
+    """One recorded run per way of recording (``--record-from``): every test holds for both."""
     d = tmp_path_factory.mktemp("rec")
     bag = d / "bag"
     p = _run("homeo_launch.cli", "sim", "--iterations", TICKS, "--seed", SEED, "--json", "--quiet",
-             "--record", bag, "--save-q", d / "q.json", "--data-dir", d, env=graph_env(fresh_domain()))
+             "--record", bag, "--record-from", request.param, "--save-q", d / "q.json", "--data-dir", d,
+             env=graph_env(fresh_domain()))
     assert p.returncode == 0, p.stderr
     return bag, p.stdout, d
 
@@ -75,7 +77,7 @@ def test_the_bag_holds_every_topic_one_message_per_tick_as_cdr_std_msgs_string(r
     stamps = got.pop("log_times")
     assert {t: len(v) for t, v in got.items()} == {t: n for t, n in counts.items() if n}
     t0 = meta["starting_time"]["nanoseconds_since_epoch"]
-    assert min(stamps) == t0 and max(stamps) - t0 < 120e9 and abs(t0 / 1e9 - time.time()) < 600  # arrival times
+    assert min(stamps) == t0 and max(stamps) - t0 < 120e9 and abs(t0 / 1e9 - time.time()) < 600  # wall-clock stamps
     assert counts["/homeo/human_input"] == 0  # the simulated human does not write it
     voc = codec.vocabulary(load_scenario())
     ticks = {}

@@ -80,22 +80,46 @@ def timed_run(o: SimOptions, sinks=()) -> dict:
     return out
 
 
-def recorded_run(iterations: int) -> dict:
-    """``timed_run`` of the graph recording every topic into a bag (``--record``), in a temporary folder."""
+def recorded_run(iterations: int, record_from: str = "writers") -> dict:
+    """``timed_run`` of the graph recording every topic into a bag (``--record``, ``--record-from``), in a
+    temporary folder; ``close_s``: what closing the bag took after the run (at the writers: the merge)."""
     import tempfile
     from pathlib import Path
 
     from homeo_decision.scenario import load_scenario
 
-    from .record import BagSink, run_info
+    from .record import BagSink, WriterBag, run_info
     from .tap import tapped_topics
 
     with tempfile.TemporaryDirectory(prefix="homeo-bench-bag-") as tmp:
-        sink = BagSink(Path(tmp) / "bag", run_info("sim", iterations, 0, load_scenario(), {}), tapped_topics())
+        bag = WriterBag if record_from == "writers" else BagSink
+        sink = bag(Path(tmp) / "bag", run_info("sim", iterations, 0, load_scenario(), {}), tapped_topics())
+        o = SimOptions(iterations=iterations, data_dir=str(Path(tmp) / "data"))
         try:
-            return timed_run(SimOptions(iterations=iterations), sinks=[sink])
+            out = timed_run(o, sinks=[sink])
         finally:
+            t = time.monotonic()
             sink.close()
+        out["close_s"] = time.monotonic() - t
+        out["messages"] = sink.count
+        return out
+
+
+def spool_s_per_message(text: str, n: int = 20000) -> float:
+    """What keeping one sent message costs its writer (``HomeoNode.spooled``: one append), timed alone:
+    the work recording at the writers adds to the tick, which a shared machine's noise does not blur."""
+    import tempfile
+
+    from homeo_msgs_py.spool import SpoolWriter
+
+    with tempfile.TemporaryDirectory(prefix="homeo-bench-spool-") as tmp:
+        w = SpoolWriter(tmp, "bench")
+        t = time.perf_counter()
+        for _ in range(n):
+            w.text("/homeo/drives", text)
+        dt = time.perf_counter() - t
+        w.close()
+    return dt / n
 
 
 def cmd_bench(args) -> int:
@@ -114,7 +138,7 @@ def cmd_bench(args) -> int:
             unsigned.append(run_graph(SimOptions(iterations=args.iterations, auth=False),
                                       quiet=True)["elapsed_s"] / args.iterations)
         if getattr(args, "record", False):
-            rec_runs.append(recorded_run(args.iterations))
+            rec_runs.append(recorded_run(args.iterations, getattr(args, "record_from", "writers")))
             recorded.append(rec_runs[-1]["s_per_tick"])
         oracle.append(run_graph(SimOptions(iterations=args.iterations, intention=ORACLE),
                                 quiet=True)["elapsed_s"] / args.iterations)
@@ -130,8 +154,18 @@ def cmd_bench(args) -> int:
     rec = {}
     if recorded:
         m = statistics.median(recorded)
-        rec = {"recorded_s_per_tick": m, "record_ratio": m / g,
-               "record_ratio_per_round": [a / b for a, b in zip(recorded, graph)]}
+        rec = {"recorded_s_per_tick": m, "record_ratio": m / g, "record_from": getattr(args, "record_from", "writers"),
+               "record_ratio_per_round": [a / b for a, b in zip(recorded, graph)],
+               "record_close_s": statistics.median(r["close_s"] for r in rec_runs),
+               "recorded_messages_per_tick": statistics.median(r["messages"] for r in rec_runs) / args.iterations}
+        if rec["record_from"] == "writers":
+            # a typical message: the drives message of a run (the longest of the per-tick ones)
+            per = spool_s_per_message(json.dumps({"schema": "homeo/drives", "version": 1, "run": 0, "tick": 500,
+                                                  "stamp": 1.0, "drives": {f"N{i}": 12.5 for i in range(5)},
+                                                  "intensities": {f"m{i}": 0.25 for i in range(4)},
+                                                  "m_dom": "Serving", "sig": "0" * 64}))
+            rec.update(spool_s_per_message=per,
+                       spool_share_of_tick=per * rec["recorded_messages_per_tick"] / g)
         # the CPU the whole graph spends a tick, without and with the recorder: less noisy than wall time
         pairs = [(a["cpu_s_per_tick"], b["cpu_s_per_tick"]) for a, b in zip(plain_runs, rec_runs)
                  if "cpu_s_per_tick" in a and "cpu_s_per_tick" in b]
@@ -171,7 +205,12 @@ def cmd_bench(args) -> int:
         if recorded:
             print(f"graph recording a bag      : {rec['recorded_s_per_tick'] * 1e3:7.3f} ms/tick; with / without --record "
                   f"{rec['record_ratio']:.3f} (target <= 1.10; per round: "
-                  f"{', '.join(f'{x:.3f}' for x in rec['record_ratio_per_round'])})")
+                  f"{', '.join(f'{x:.3f}' for x in rec['record_ratio_per_round'])}); recorded at the "
+                  f"{rec['record_from']}, closing the bag took {rec['record_close_s']:.2f} s after the run")
+            if "spool_s_per_message" in rec:
+                print(f"recording at the writers   : {rec['spool_s_per_message'] * 1e6:.1f} us a message (timed alone) x "
+                      f"{rec['recorded_messages_per_tick']:.1f} messages a tick = "
+                      f"{rec['spool_share_of_tick'] * 100:.2f}% of the tick (the work it adds to the tick)")
             if "record_cpu_ratio" in rec:
                 print(f"graph CPU a tick (all processes): {rec['cpu_s_per_tick'] * 1e3:7.3f} ms, recording "
                       f"{rec['cpu_s_per_tick_recording'] * 1e3:.3f} ms; with / without --record "

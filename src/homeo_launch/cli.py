@@ -58,6 +58,8 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--rounds", type=int_at_least(1), default=3, help="alternating graph/floor pairs (default 3)")
     b.add_argument("--record", action="store_true",
                    help="also time the graph recording a bag, and print the ratio with / without recording")
+    b.add_argument("--record-from", choices=("writers", "tap"), default="writers",
+                   help="how the timed recording records (as sim --record-from; default writers)")
     b.add_argument("--compare-auth", action="store_true",
                    help="also time the graph without authentication (--no-auth), and print the ratio")
     b.add_argument("--json", action="store_true")

@@ -8,6 +8,10 @@ import argparse
 def add_live_options(p) -> None:
     """--record and --foxglove, shared by sim and pepper."""
     p.add_argument("--record", metavar="DIR", help="record every topic as a rosbag2 bag (MCAP) in this new folder")
+    p.add_argument("--record-from", choices=("writers", "tap"), default="writers",
+                   help="writers (default): each node keeps what it sends, merged into the bag after the run (stamped "
+                        "when sent; costs the tick a few microseconds a message); tap: the launcher subscribes to "
+                        "every topic (stamped when received, strangers' messages kept; costs the tick about 10-30%%)")
     p.add_argument("--foxglove", metavar="[HOST:]PORT", type=host_port, default=None,
                    help="serve the run live to the Foxglove app over WebSocket (host 127.0.0.1 unless given)")
 

@@ -37,7 +37,7 @@ from homeo_msgs_py import graph as G
 from homeo_msgs_py.cli_args import UserError, float_in, int_at_least
 
 from .processes import Graph, NodeSpec, add_graph_options, dds_defaults, graph_env
-from .sim import DISCOVERY_TIMEOUT_S, PROG, GraphError, Monitor
+from .sim import DISCOVERY_TIMEOUT_S, PROG, GraphError, Monitor, open_tap, split_sinks, with_spool
 from .supervise import Supervisor
 from .supervise import wait_until_up as supervised_wait
 
@@ -267,18 +267,20 @@ def run_pepper_graph(specs: list[NodeSpec], log_dir: Path, standin: StandinProce
     ``sinks``: as for ``sim.run_graph``; the robot nodes start first, and every node's topics wait
     for the tap (``extra_readers``) before their first message."""
     os.environ.update(dds_defaults())
+    tap_sinks, writers = split_sinks(sinks)
+    if writers is not None:
+        with_spool(specs, writers, specs[0].params["data_dir"])
     graph = Graph(specs, env or graph_env(), str(log_dir), namespace=namespace, auth=auth)
     mon = tap = None
     shown = 0
     try:
         mon = Monitor(graph.namespace, graph.signer)
         sup = Supervisor(graph, mon.node, max_restarts, os.path.abspath(checkpoint_dir) if checkpoint_dir else "",
-                         log=(lambda text: None) if quiet else None)
-        if sinks:
+                         log=(lambda text: None) if quiet else None, spool=writers.own if writers else None)
+        tap = open_tap(mon, graph, tap_sinks, writers)
+        if tap_sinks:
             from .sim import start_robot_first
-            from .tap import Tap
 
-            tap = Tap(mon.node, sinks, signer=graph.signer)
             start_robot_first(graph, mon, tap, discovery_timeout)
         graph.start()
         _wait_up(graph, mon, standin, endpoints(intention), discovery_timeout, sup)
@@ -302,7 +304,7 @@ def run_pepper_graph(specs: list[NodeSpec], log_dir: Path, standin: StandinProce
             if sup.restarts and last is not None:
                 last["restarts"] = dict(sup.restarts)
             if st.fields["done"]:
-                if tap is not None:
+                if tap_sinks:
                     from .sim import drain
 
                     drain(mon, tap)
@@ -372,7 +374,7 @@ def run_robot(a, label: str, dod: float | None, q_table: str | None, log_dir: Pa
                              collect_quiet=a.collect_quiet, action_timeout=a.action_timeout,
                              end_with_script=bool(a.standin and script), user=a.user or "",
                              password=a.password or "", config=a.config or "", intention=a.intention,
-                             extra_readers=1 if sinks else 0, naoqi_version=a.naoqi_version or "",
+                             extra_readers=1 if split_sinks(sinks)[0] else 0, naoqi_version=a.naoqi_version or "",
                              data_dir=a.data_dir, durable=durable)
         status = run_pepper_graph(specs, log_dir, standin, on_row=on_row, last=last, intention=a.intention,
                                   sinks=sinks, namespace=a.namespace, auth=not a.no_auth,

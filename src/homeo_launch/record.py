@@ -3,8 +3,9 @@
 Written with ``rosbags`` (pure Python, no ROS install): every topic of the graph as
 ``std_msgs/msg/String`` and ``/diagnostics`` as ``diagnostic_msgs/msg/DiagnosticArray``, each with
 its writers' QoS in the metadata, so ``ros2 bag play`` republishes the latched topics latched.
-Messages are the CDR bytes the tap received (``tap.py``), stamped with their arrival time, as
-``ros2 bag record`` does. The run's settings (graph, ticks, seed, the scenario itself) go into the
+Two ways to fill it (``--record-from``): ``WriterBag`` (default) merges what each node kept of what it
+sent (``homeo_msgs_py.spool``), stamped with the send time; ``BagSink`` takes the CDR bytes the
+launcher's tap received (``tap.py``), stamped with their arrival time, as ``ros2 bag record`` does. The run's settings (graph, ticks, seed, the scenario itself) go into the
 metadata's ``custom_data`` so that ``homeo-replay`` needs the bag alone.
 """
 
@@ -81,3 +82,68 @@ def run_info(graph: str, iterations: int, seed: int, sc, overrides, **extra) -> 
     (``sc``: the loaded scenario, whose ``source`` is its file)."""
     return dict(extra, graph=graph, iterations=iterations, seed=seed, overrides=dict(overrides),
                 scenario_source=str(sc.source), scenario=json.loads(Path(sc.source).read_text()))
+
+
+class WriterBag:
+    """``--record`` at the writers (the default; ``homeo_msgs_py.spool``): every node appends what it
+    sends to a spool of its own, the launcher what it publishes (/diagnostics of restarts) and what
+    its tap takes from outside the graph (``homeo/human_input``, a person's); ``close`` merges them
+    in the order they were sent into a rosbag2 bag written as ``BagSink`` writes one, then deletes
+    the spools. The graph never waits for a recorder: there is none on the wire."""
+
+    at_writers = True
+    OUTSIDE = ("human_input",)  # written by no node of the graph: taken by the tap
+
+    def __init__(self, path: str | Path, info: dict, topics: list[Tapped]):
+        self.path, self.info, self.topics = Path(path), info, topics
+        self.tap_topics = [t for t in topics if t.key in self.OUTSIDE]
+        self.spool_dir: Path | None = None
+        self.own = None  # the launcher's spool
+        self.count = 0
+
+    def prepare(self, data_dir: str) -> str:
+        """The spool folder, made inside the nodes' data directory (where they accept a path)."""
+        import tempfile
+
+        from homeo_msgs_py.spool import SpoolWriter
+
+        if self.spool_dir is None:
+            os.makedirs(data_dir, exist_ok=True)
+            self.spool_dir = Path(tempfile.mkdtemp(prefix=".homeo-record-", dir=data_dir))
+            self.own = SpoolWriter(self.spool_dir, "homeo_launch")
+        return str(self.spool_dir)
+
+    def write(self, t: Tapped, stamp_ns: int, raw: bytes) -> None:
+        """A message the tap took (one of ``tap_topics``), kept with its arrival stamp."""
+        if self.own is not None and t in self.tap_topics:
+            self.own.cdr(t.name, raw, stamp_ns)
+
+    def close(self) -> None:
+        """Merge the spools into the bag (also after Ctrl-C: what was sent is kept), then delete them."""
+        import shutil
+
+        if self.spool_dir is None:
+            return
+        from rosbags.typesys import Stores, get_typestore
+
+        from homeo_msgs_py.spool import TEXT, read_spools
+
+        self.own.close()
+        records, torn = read_spools(self.spool_dir)
+        store = get_typestore(Stores.ROS2_JAZZY)
+        String = store.types["std_msgs/msg/String"]
+        by_name = {t.name: t for t in self.topics}
+        sink = BagSink(self.path, dict(self.info, recorded_at="writers", torn_bytes=torn), self.topics)
+        try:
+            for r in records:
+                t = by_name.get(r.topic)
+                if t is None:
+                    continue  # a topic outside the bag's list
+                raw = (bytes(store.serialize_cdr(String(data=r.payload.decode("utf-8")), t.msgtype))
+                       if r.kind == TEXT else r.payload)
+                sink.write(t, r.stamp_ns, raw)
+            self.count = sink.count
+        finally:
+            sink.close()
+        shutil.rmtree(self.spool_dir, ignore_errors=True)
+        self.spool_dir = None

@@ -36,7 +36,7 @@ from .supervise import Supervisor
 from .supervise import wait_until_up as supervised_wait
 
 PROG = "homeo-launch"
-INTERRUPT_STATUS_S = 2.0  # on Ctrl-C, how long to wait for the run's status when none came yet
+INTERRUPT_STATUS_S = 5.0  # on Ctrl-C, how long to wait for the run's status when none came yet (latched: it comes once the monitor has matched, which on a loaded machine took over 2 s)
 
 
 @dataclass
@@ -119,21 +119,20 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
     is called once every node is up (the soak benchmark watches their processes)."""
     env = graph_env()
     os.environ.update(dds_defaults())  # the launcher's own node too
-    if sinks:
+    tap_sinks, writers = split_sinks(sinks)
+    if tap_sinks:
         o = replace(o, extra_readers=1)
     if o.checkpoint_dir and not o.session:
         o = replace(o, session=new_session())
-    graph = Graph(sim_specs(o), env, log_dir, namespace=o.namespace, auth=o.auth)
+    graph = Graph(with_spool(sim_specs(o), writers, o.data_dir), env, log_dir, namespace=o.namespace, auth=o.auth)
     mon = tap = sup = None
     try:
         mon = Monitor(graph.namespace, graph.signer)
         sup = Supervisor(graph, mon.node, o.max_restarts, os.path.abspath(o.checkpoint_dir) if o.checkpoint_dir else "",
-                         log=(lambda text: None) if quiet else None)
-        if sinks:
-            from .tap import Tap
-
-            tap = Tap(mon.node, sinks, signer=graph.signer)
-            for s in sinks:
+                         log=(lambda text: None) if quiet else None, spool=writers.own if writers else None)
+        tap = open_tap(mon, graph, tap_sinks, writers)
+        if tap_sinks:
+            for s in tap_sinks:
                 if hasattr(s, "attach"):
                     s.attach(mon.node)
             start_robot_first(graph, mon, tap, discovery_timeout)
@@ -159,7 +158,7 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
                     on_progress(st.tick, st.fields)
             if st.fields["done"]:
                 break
-        if tap is not None:
+        if tap_sinks:
             drain(mon, tap)
         out = dict(mon.status.fields)
         out["elapsed_s"] = (out.get("extra") or {}).get("elapsed_s", time.monotonic() - t_start)
@@ -199,6 +198,33 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
         if not quiet and any(c not in (0, None, -2, 130) for c in codes.values()):
             bad = ", ".join(f"{n}={c}" for n, c in codes.items() if c not in (0, None, -2, 130))
             print(f"{PROG}: note: nodes stopped with exit codes {bad}", file=sys.stderr)
+
+
+def split_sinks(sinks) -> tuple[list, object]:
+    """The sinks fed by the launcher's tap (a live view, a bag recorded at the tap), and the bag
+    recorded at the writers (``record.WriterBag``) or None."""
+    writers = next((s for s in sinks if getattr(s, "at_writers", False)), None)
+    return [s for s in sinks if s is not writers], writers
+
+
+def with_spool(specs: list, writers, data_dir: str) -> list:
+    """``specs`` with every node appending what it sends to the writers' spool, when recording there."""
+    if writers is not None:
+        folder = writers.prepare(os.path.abspath(data_dir))
+        for s in specs:
+            s.params["record_spool"] = folder
+    return specs
+
+
+def open_tap(mon: Monitor, graph: Graph, tap_sinks: list, writers):
+    """The launcher's tap: every topic for ``tap_sinks``, and (recording at the writers) the topics
+    the graph takes from outside; None when nothing needs one."""
+    if not tap_sinks and (writers is None or not writers.tap_topics):
+        return None
+    from .tap import Tap
+
+    sinks = tap_sinks + ([writers] if writers is not None else [])
+    return Tap(mon.node, sinks, topics=None if tap_sinks else writers.tap_topics, signer=graph.signer)
 
 
 def start_robot_first(graph: Graph, mon: Monitor, tap, bound: float) -> None:
@@ -316,10 +342,10 @@ def open_sinks(a, graph: str, iterations: int, seed: int, sc, overrides, **extra
     sinks = []
     try:
         if getattr(a, "record", None):
-            from .record import BagSink, check_new_bag, run_info
+            from .record import BagSink, WriterBag, check_new_bag, run_info
 
-            sinks.append(BagSink(check_new_bag(a.record), run_info(graph, iterations, seed, sc, overrides, **extra),
-                                 topics))
+            bag = WriterBag if getattr(a, "record_from", "writers") == "writers" else BagSink
+            sinks.append(bag(check_new_bag(a.record), run_info(graph, iterations, seed, sc, overrides, **extra), topics))
         if getattr(a, "foxglove", None):
             from .live import FoxgloveSink
 

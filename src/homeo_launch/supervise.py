@@ -27,7 +27,7 @@ DIAG_PERIOD_S = 1.0
 
 class Supervisor:
     def __init__(self, graph: Graph, node=None, max_restarts: int = MAX_RESTARTS, checkpoint_dir: str = "",
-                 log=None, clock=time.monotonic):
+                 log=None, clock=time.monotonic, spool=None):
         self.graph, self.max_restarts, self.checkpoint_dir = graph, max_restarts, checkpoint_dir
         self.log = log or (lambda text: print(text, file=sys.stderr))
         self.clock = clock
@@ -35,6 +35,7 @@ class Supervisor:
         self._due: dict[str, float] = {}  # node -> when to start it again
         self._pub = self._diag_at = None
         self._node = node
+        self._spool = spool  # recording at the writers: the launcher keeps what it publishes too
         if node is not None:
             from diagnostic_msgs.msg import DiagnosticArray
 
@@ -94,6 +95,10 @@ class Supervisor:
             message=", ".join(f"{n} restarted {k}x" for n, k in sorted(self.restarts.items())) or "no restarts",
             values=[KeyValue(key=n, value=str(k)) for n, k in sorted(self.restarts.items())])]
         self._pub.publish(arr)
+        if self._spool is not None:
+            from rclpy.serialization import serialize_message
+
+            self._spool.cdr("/diagnostics", serialize_message(arr))
 
 
 def _keep_log(g: Graph, name: str, n: int) -> None:

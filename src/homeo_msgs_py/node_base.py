@@ -55,13 +55,17 @@ class GatedPublisher:
         if not self.open and self.matched() >= self.min_subs:
             self.open = True
         if self.open and not self._queue:
-            self.pub.publish(String(data=text))
+            self._send(text)
             return
         self._queue.append(text)
         if self._since is None:
             self._since = time.monotonic()
         if self._timer is None:
             self._timer = self.node.create_timer(0.005, self._flush)
+
+    def _send(self, text: str) -> None:
+        self.pub.publish(String(data=text))
+        self.node.spooled(self.pub.topic_name, text)
 
     def _flush(self) -> None:
         if not self.open:
@@ -75,7 +79,7 @@ class GatedPublisher:
             else:
                 return
         for text in self._queue:
-            self.pub.publish(String(data=text))
+            self._send(text)
         self._queue.clear()
         self._timer.cancel()
         self.node.destroy_timer(self._timer)
@@ -107,9 +111,39 @@ class HomeoNode(Node):
             description="readers beyond the graph's (a recorder, a live view) that this node's topics wait for "
                         "before their first message: so that they miss nothing of the run; set at start",
             integer_range=[IntegerRange(from_value=0, to_value=100, step=1)]))
+        self.spool = self._open_spool(self.declare_fixed("record_spool", "", ParameterDescriptor(
+            description="a folder (in data_dir) where this node appends every message it sends, for the launcher's "
+                        "--record to merge into the bag after the run; '' = not recording; set at start")))
         self.add_on_set_parameters_callback(self._guard_fixed)
         self._diag_pub = self.create_publisher(DiagnosticArray, DIAGNOSTICS, 10, event_callbacks=quiet_pub_events())
         self._diag_timer = self.create_timer(DIAG_PERIOD_S, self.publish_diagnostics)
+
+    # -- recording at the writers (homeo_msgs_py.spool) ----------------------------------------
+    def _open_spool(self, folder: str):
+        if not folder:
+            return None
+        from .spool import SpoolWriter
+
+        try:
+            path = self.data_path(folder, "record_spool")
+            return SpoolWriter(path, self.get_name())
+        except (data_dir.OutsideDataDir, OSError) as exc:
+            raise NodeConfigError(f"record_spool: {exc.strerror if isinstance(exc, OSError) else exc}") from None
+
+    def spooled(self, topic: str, text: str | None = None, raw: bytes | None = None) -> None:
+        """Keep a message this node just sent, when recording: the text of a String, or CDR bytes.
+        A spool that cannot be written (disk full) stops recording with one error, never the node."""
+        if self.spool is None:
+            return
+        try:
+            if text is not None:
+                self.spool.text(topic, text)
+            else:
+                self.spool.cdr(topic, raw)
+        except OSError as exc:
+            self.spool.close()
+            self.spool = None
+            self.get_logger().error(f"recording stopped: writing {topic} to the spool failed: {exc.strerror}")
 
     # -- files named by parameters ---------------------------------------------------------
     def data_path(self, path: str, what: str) -> str:
@@ -208,6 +242,10 @@ class HomeoNode(Node):
                                        values=[KeyValue(key=k, value=v) for k, v in st["values"].items()])
                       for st in [self.rejects.status(), *self.extra_statuses()]]
         self._diag_pub.publish(arr)
+        if self.spool is not None:
+            from rclpy.serialization import serialize_message
+
+            self.spooled(DIAGNOSTICS, raw=serialize_message(arr))
         self.rejects.changed = False
 
     def extra_statuses(self) -> list[dict]:
