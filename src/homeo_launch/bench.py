@@ -163,7 +163,7 @@ def cmd_bench(args) -> int:
             per = spool_s_per_message(json.dumps({"schema": "homeo/drives", "version": 1, "run": 0, "tick": 500,
                                                   "stamp": 1.0, "drives": {f"N{i}": 12.5 for i in range(5)},
                                                   "intensities": {f"m{i}": 0.25 for i in range(4)},
-                                                  "m_dom": "Serving", "sig": "0" * 64}))
+                                                  "m_dom": "m0", "sig": "0" * 64}))
             rec.update(spool_s_per_message=per,
                        spool_share_of_tick=per * rec["recorded_messages_per_tick"] / g)
         # the CPU the whole graph spends a tick, without and with the recorder: less noisy than wall time
