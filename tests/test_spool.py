@@ -141,7 +141,11 @@ def test_a_node_refuses_a_spool_folder_outside_its_data_directory_on_one_line(tm
                        capture_output=True, text=True, timeout=60)
     assert r.returncode == 2, r.stderr
     lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
-    assert lines == [lines[0]] and "record_spool /etc is outside the data directory" in lines[0], r.stderr
+    assert lines == ["error: record_spool /etc is outside the data directory " + str(tmp_path.resolve())], r.stderr
+    r = subprocess.run([sys.executable, "-m", "homeo_decision.drives_node", "--ros-args", "-p",
+                        f"data_dir:={tmp_path}", "-p", "record_spool:=gone"], env=graph_env(fresh_domain()),
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2 and r.stderr.strip() == "error: record_spool gone: No such file or directory", r.stderr
 
 
 @pytest.mark.ros

@@ -264,8 +264,8 @@ def run_pepper_graph(specs: list[NodeSpec], log_dir: Path, standin: StandinProce
                      auth: bool = True, max_restarts: int = 0, checkpoint_dir: str = "", quiet: bool = False) -> dict:
     """Run the bridge graph until the bridge reports done; returns its last run status fields.
     Raises GraphError (a node or the stand-in died, or the graph never came up) or KeyboardInterrupt.
-    ``sinks``: as for ``sim.run_graph``; the robot nodes start first, and every node's topics wait
-    for the tap (``extra_readers``) before their first message."""
+    ``sinks``: as for ``sim.run_graph``; with a tap the robot nodes start first, and every node's
+    topics wait for the tap (``extra_readers``) before their first message."""
     os.environ.update(dds_defaults())
     tap_sinks, writers = split_sinks(sinks)
     if writers is not None:

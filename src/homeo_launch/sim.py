@@ -36,7 +36,9 @@ from .supervise import Supervisor
 from .supervise import wait_until_up as supervised_wait
 
 PROG = "homeo-launch"
-INTERRUPT_STATUS_S = 5.0  # on Ctrl-C, how long to wait for the run's status when none came yet (latched: it comes once the monitor has matched, which on a loaded machine took over 2 s)
+# on Ctrl-C, how long to wait for the run's status when none came yet (it is latched: it comes once the
+# monitor has matched the world node, which on a loaded machine once took over 2 s)
+INTERRUPT_STATUS_S = 5.0
 
 
 @dataclass
@@ -114,8 +116,9 @@ def run_graph(o: SimOptions, quiet: bool = False, log_dir: str | None = None, on
               on_start=None) -> dict:
     """Run the simulated graph to the end; returns the last run status fields (metrics included)
     plus ``elapsed_s`` (first tick to done) and ``rss_mb``. Raises GraphError or KeyboardInterrupt.
-    ``sinks`` (a bag, a live view) get every message of the run from the launcher's tap
-    (``tap.py``); the simulation waits for the tap's subscriptions before tick 0. ``on_start(graph)``
+    ``sinks`` (a bag, a live view) get every message of the run: from the launcher's tap (``tap.py``;
+    the simulation waits for the tap's subscriptions before tick 0), or, for a bag recorded at the
+    writers (``record.WriterBag``), from what each node keeps of what it sends. ``on_start(graph)``
     is called once every node is up (the soak benchmark watches their processes)."""
     env = graph_env()
     os.environ.update(dds_defaults())  # the launcher's own node too

@@ -126,9 +126,12 @@ class HomeoNode(Node):
 
         try:
             path = self.data_path(folder, "record_spool")
+        except data_dir.OutsideDataDir as exc:
+            raise NodeConfigError(str(exc)) from None
+        try:
             return SpoolWriter(path, self.get_name())
-        except (data_dir.OutsideDataDir, OSError) as exc:
-            raise NodeConfigError(f"record_spool: {exc.strerror if isinstance(exc, OSError) else exc}") from None
+        except OSError as exc:
+            raise NodeConfigError(f"record_spool {one_line(folder)}: {exc.strerror}") from None
 
     def spooled(self, topic: str, text: str | None = None, raw: bytes | None = None) -> None:
         """Keep a message this node just sent, when recording: the text of a String, or CDR bytes.
