@@ -1,7 +1,7 @@
 """Property tests of the inputs added for issues 11-13 that are not messages (those are in
 test_decode_boundary): path parameters, namespaces, the overrides parameter, the graph's secret
 file, numeric command-line options, checkpoint files and the robot's answer to
-ALSystem.systemVersion. Each either accepts a valid value or refuses it with its own error type;
+ALSystem.systemVersion; for issue 14 the record_spool parameter and --record-from. Each either accepts a valid value or refuses it with its own error type;
 nothing else escapes."""
 
 from __future__ import annotations
@@ -322,3 +322,42 @@ def test_the_trials_files_in_the_repo_are_read_whole():
     joint_search = _joint_search()
     docs = Path(__file__).resolve().parents[1] / "docs" / "calibration"
     assert len(joint_search.read_trials(f"{docs / 'joint-trials.jsonl'},{docs / 'joint-trials-2.jsonl'}")) == 256
+
+
+# -- issue 14: recording at the writers ------------------------------------------------------------
+@FAST
+@given(folder=st.text(max_size=40) | st.sampled_from(["../x", "/etc", "spool", "spool/../spool", "file", "gone", "\0"]))
+def test_the_record_spool_parameter_opens_a_spool_in_the_data_dir_or_is_refused(tmp_path, folder):
+    from homeo_msgs_py.node_base import open_spool
+
+    base = tmp_path / "out"
+    (base / "spool").mkdir(parents=True, exist_ok=True)
+    (base / "file").write_text("")
+    try:
+        w = open_spool(str(base), folder, "homeo_drives")
+    except NodeConfigError as exc:
+        assert str(exc) and "\n" not in str(exc)
+        return
+    if not folder:
+        assert w is None
+        return
+    try:
+        real = os.path.realpath(base)
+        assert os.path.commonpath([real, str(w.path)]) == real and w.path.parent.is_dir()
+    finally:
+        w.close()
+        w.path.unlink()
+
+
+@FAST
+@given(value=st.text(max_size=20), command=st.sampled_from(["sim", "pepper", "bench"]))
+def test_record_from_is_writers_or_tap_or_refused(value, command):
+    from homeo_launch.cli import build_parser
+    from homeo_msgs_py.cli_args import UserError
+
+    try:
+        a = build_parser().parse_args([command, "--record-from", value])
+    except UserError as exc:  # main prints it on one line, exit 2
+        assert "--record-from" in str(exc) and "\n" not in str(exc) and value not in ("writers", "tap")
+        return
+    assert a.record_from == value in ("writers", "tap")

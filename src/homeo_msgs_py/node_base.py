@@ -120,18 +120,7 @@ class HomeoNode(Node):
 
     # -- recording at the writers (homeo_msgs_py.spool) ----------------------------------------
     def _open_spool(self, folder: str):
-        if not folder:
-            return None
-        from .spool import SpoolWriter
-
-        try:
-            path = self.data_path(folder, "record_spool")
-        except data_dir.OutsideDataDir as exc:
-            raise NodeConfigError(str(exc)) from None
-        try:
-            return SpoolWriter(path, self.get_name())
-        except OSError as exc:
-            raise NodeConfigError(f"record_spool {one_line(folder)}: {exc.strerror}") from None
+        return open_spool(self._data_dir, folder, self.get_name())
 
     def spooled(self, topic: str, text: str | None = None, raw: bytes | None = None) -> None:
         """Keep a message this node just sent, when recording: the text of a String, or CDR bytes.
@@ -254,6 +243,23 @@ class HomeoNode(Node):
     def extra_statuses(self) -> list[dict]:
         """More DiagnosticStatus dicts (level, name, message, hardware_id, values) a node reports."""
         return []
+
+
+def open_spool(base: str, folder, who: str):
+    """The ``record_spool`` parameter's spool (``homeo_msgs_py.spool``) for node ``who``: None for '',
+    else a writer in ``folder`` inside the data directory ``base``, or a one-line NodeConfigError."""
+    if not folder:
+        return None
+    from .spool import SpoolWriter
+
+    try:
+        path = data_dir.resolve(base, folder, "record_spool")
+    except data_dir.OutsideDataDir as exc:
+        raise NodeConfigError(str(exc)) from None
+    try:
+        return SpoolWriter(path, who)
+    except OSError as exc:
+        raise NodeConfigError(f"record_spool {one_line(folder)}: {one_line(str(exc.strerror))}") from None
 
 
 def _die_with_parent() -> None:
