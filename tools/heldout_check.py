@@ -20,7 +20,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import joint_search as j  # noqa: E402
 from homeo_sim.sweep import SWEEPS  # noqa: E402
 
-CHANGES = ({}, {"human_proposal_prob": 0.9}, {"human_proposal_prob": 0.8}, {"tie_break": "last"})
+# the adopted block's rivals (docs/FIDELITY.md, "Third stage"); a change that is the default already is scored once
+CHANGES = ({}, {"human_proposal_prob": 0.8}, {"human_proposal_prob": 0.9}, {"human_proposal_prob": 1.0},
+           {"tie_break": "last"})
 
 
 def main(argv=None) -> int:
@@ -41,12 +43,16 @@ def main(argv=None) -> int:
     bad = [k for c in changes for k in c if k not in start]
     if bad:
         ap.error(f"not a searched open choice: {', '.join(bad)}")
+    points = []  # each distinct point once: a change equal to the default is the default
+    for c in changes:
+        if {**start, **c} not in points:
+            points.append({**start, **c})
     print("| point | seeds | Table 4.5 inside | statements | trends | HSR | RSR | inside | unmet |")
     print("|---|---|---|---|---|---|---|---|---|")
     for spec, seeds in zip(a.seed_sets, sets):
-        for c in changes:
-            e = j.evaluate({**start, **c}, seeds, dods=SWEEPS["dod"], workers=a.workers)
-            print(f"| {j.diff({**start, **c}, start)} | {spec} | {e['inside']}/12 | {e['met']}/10 | {e['trends']}/6 | "
+        for point in points:
+            e = j.evaluate(point, seeds, dods=SWEEPS["dod"], workers=a.workers)
+            print(f"| {j.diff(point, start)} | {spec} | {e['inside']}/12 | {e['met']}/10 | {e['trends']}/6 | "
                   f"{e['HSR']:.3f} | {e['RSR']:.3f} | {', '.join(e['inside_names'])} | {', '.join(e['unmet'])} |",
                   flush=True)
     return 0

@@ -88,12 +88,12 @@ def recorded_run(iterations: int, record_from: str = "writers") -> dict:
 
     from homeo_decision.scenario import load_scenario
 
-    from .record import BagSink, WriterBag, run_info
+    from .record import new_bag, run_info
     from .tap import tapped_topics
 
     with tempfile.TemporaryDirectory(prefix="homeo-bench-bag-") as tmp:
-        bag = WriterBag if record_from == "writers" else BagSink
-        sink = bag(Path(tmp) / "bag", run_info("sim", iterations, 0, load_scenario(), {}), tapped_topics())
+        sink = new_bag(Path(tmp) / "bag", run_info("sim", iterations, 0, load_scenario(), {}), tapped_topics(),
+                       record_from)
         o = SimOptions(iterations=iterations, data_dir=str(Path(tmp) / "data"))
         try:
             out = timed_run(o, sinks=[sink])

@@ -77,6 +77,11 @@ class BagSink:
             w.close()
 
 
+def new_bag(path, info: dict, topics: list[Tapped], record_from: str = "writers"):
+    """The bag ``--record`` writes, filled as ``--record-from`` says: ``WriterBag`` or ``BagSink``."""
+    return (WriterBag if record_from == "writers" else BagSink)(path, info, topics)
+
+
 def run_info(graph: str, iterations: int, seed: int, sc, overrides, **extra) -> dict:
     """What homeo-replay needs besides the messages: the run's settings and its scenario's text
     (``sc``: the loaded scenario, whose ``source`` is its file)."""

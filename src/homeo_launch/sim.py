@@ -345,10 +345,10 @@ def open_sinks(a, graph: str, iterations: int, seed: int, sc, overrides, **extra
     sinks = []
     try:
         if getattr(a, "record", None):
-            from .record import BagSink, WriterBag, check_new_bag, run_info
+            from .record import check_new_bag, new_bag, run_info
 
-            bag = WriterBag if getattr(a, "record_from", "writers") == "writers" else BagSink
-            sinks.append(bag(check_new_bag(a.record), run_info(graph, iterations, seed, sc, overrides, **extra), topics))
+            sinks.append(new_bag(check_new_bag(a.record), run_info(graph, iterations, seed, sc, overrides, **extra),
+                                 topics, getattr(a, "record_from", "writers")))
         if getattr(a, "foxglove", None):
             from .live import FoxgloveSink
 

@@ -30,7 +30,7 @@ TEXT, CDR = 0, 1
 SUFFIX = ".spool"
 
 
-@dataclass(frozen=True, order=True)
+@dataclass(frozen=True)
 class Record:
     stamp_ns: int
     topic: str
