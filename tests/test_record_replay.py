@@ -36,7 +36,8 @@ def recorded(request, tmp_path_factory):
     """One recorded run per way of recording (``--record-from``): every test holds for both."""
     d = tmp_path_factory.mktemp("rec")
     bag = d / "bag"
-    p = _run("homeo_launch.cli", "sim", "--iterations", TICKS, "--seed", SEED, "--json", "--quiet",
+    # 3 s at 20 ticks a second: several /diagnostics periods (1 s), for the tap to hear some
+    p = _run("homeo_launch.cli", "sim", "--iterations", TICKS, "--rate", 20, "--seed", SEED, "--json", "--quiet",
              "--record", bag, "--record-from", request.param, "--save-q", d / "q.json", "--data-dir", d,
              env=graph_env(fresh_domain()))
     assert p.returncode == 0, p.stderr

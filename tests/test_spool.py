@@ -149,6 +149,41 @@ def test_a_node_refuses_a_spool_folder_outside_its_data_directory_on_one_line(tm
 
 
 @pytest.mark.ros
+def test_a_node_sends_its_first_status_before_its_first_diagnostics_period(tmp_path):
+    """A run shorter than the /diagnostics period (1 s) still has each node's status in its bag: the
+    first one goes out (and into the spool) on the node's first turn, not a period later."""
+    import rclpy
+    from rclpy.context import Context
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.parameter import Parameter
+
+    from rosgraph import fresh_domain
+
+    from homeo_msgs_py.node_base import HomeoNode
+
+    (tmp_path / "spool").mkdir()
+    ctx = Context()
+    rclpy.init(context=ctx, domain_id=fresh_domain())
+    node = None
+    try:
+        node = HomeoNode("first_status", context=ctx, parameter_overrides=[
+            Parameter("data_dir", value=str(tmp_path)), Parameter("record_spool", value="spool")])
+        ex = SingleThreadedExecutor(context=ctx)
+        ex.add_node(node)
+        for _ in range(3):
+            ex.spin_once(timeout_sec=0.0)
+        assert node._diag_timer.time_until_next_call() > 0  # the periodic one has not fired: not its message
+        node.spool.close()
+        (spool,) = (tmp_path / "spool").iterdir()
+        records, torn = read_spool(spool)
+        assert torn == 0 and [r.topic for r in records] == ["/diagnostics"] and records[0].kind == CDR
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown(context=ctx)
+
+
+@pytest.mark.ros
 def test_a_persons_words_reach_a_bag_recorded_at_the_writers(tmp_path):
     """``--human person --record``: the nodes keep what they send; the launcher's tap takes the
     person's ``homeo/human_input`` (written by no node) into the same bag."""

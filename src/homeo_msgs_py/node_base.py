@@ -117,6 +117,12 @@ class HomeoNode(Node):
         self.add_on_set_parameters_callback(self._guard_fixed)
         self._diag_pub = self.create_publisher(DiagnosticArray, DIAGNOSTICS, 10, event_callbacks=quiet_pub_events())
         self._diag_timer = self.create_timer(DIAG_PERIOD_S, self.publish_diagnostics)
+        # and one status as soon as the node spins: a run shorter than the period still has one
+        self._first_diag = self.create_timer(0.0, self._publish_first_diagnostics)
+
+    def _publish_first_diagnostics(self) -> None:
+        self.destroy_timer(self._first_diag)
+        self.publish_diagnostics()
 
     # -- recording at the writers (homeo_msgs_py.spool) ----------------------------------------
     def _open_spool(self, folder: str):
