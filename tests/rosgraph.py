@@ -134,3 +134,18 @@ def sim_graph(opts, domain: int):
     finally:
         g.stop()
         g.close()
+
+
+def wait_spooled_actions(data_dir: Path, proc, n: int, bound: float = 120.0) -> None:
+    """Until the decision node of a run recording at the writers into ``data_dir`` has kept ``n``
+    actions in its spool (``proc``: the launcher, which must not end meanwhile)."""
+    from homeo_msgs_py.spool import read_spool
+
+    end = time.monotonic() + bound
+    while True:
+        assert proc.poll() is None and time.monotonic() < end, proc.stderr.read() if proc.poll() is not None else ""
+        kept = [r for f in data_dir.glob(".homeo-record-*/homeo_decision-*.spool") for r in read_spool(f)[0]
+                if r.topic == "/homeo/action"]
+        if len(kept) >= n:
+            return
+        time.sleep(0.2)

@@ -239,7 +239,7 @@ def test_ctrl_c_keeps_every_message_sent_until_then_in_the_bag(tmp_path):
     from mcap.reader import make_reader
     from mcap_ros2.decoder import DecoderFactory
 
-    from rosgraph import fresh_domain
+    from rosgraph import fresh_domain, wait_spooled_actions
 
     from homeo_launch.processes import graph_env
 
@@ -249,14 +249,7 @@ def test_ctrl_c_keeps_every_message_sent_until_then_in_the_bag(tmp_path):
                             env=graph_env(fresh_domain()), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             start_new_session=True)
     try:
-        end = time.monotonic() + 120
-        while True:  # until the decision node has kept 50 actions
-            assert proc.poll() is None and time.monotonic() < end, proc.stderr.read() if proc.poll() is not None else ""
-            kept = [r for f in tmp_path.glob(".homeo-record-*/homeo_decision-*.spool") for r in read_spool(f)[0]
-                    if r.topic == "/homeo/action"]
-            if len(kept) >= 50:
-                break
-            time.sleep(0.2)
+        wait_spooled_actions(tmp_path, proc, 50)
         os.killpg(proc.pid, signal.SIGINT)
         out, err = proc.communicate(timeout=90)
     finally:

@@ -66,6 +66,9 @@ def build_parser() -> argparse.ArgumentParser:
     from .soak import add_parser as add_soak
 
     add_soak(sub)
+    from .recover import add_parser as add_recover
+
+    add_recover(sub)
     return ap
 
 
@@ -92,6 +95,10 @@ def main(argv=None) -> int:
             from .soak import cmd_soak
 
             return cmd_soak(args)
+        if args.cmd == "recover":
+            from .recover import cmd_recover
+
+            return cmd_recover(args)
         from .bench import cmd_bench
 
         return cmd_bench(args)

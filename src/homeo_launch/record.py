@@ -17,7 +17,7 @@ from pathlib import Path
 
 from homeo_msgs_py.cli_args import UserError
 
-from .tap import Tapped, pub_qos_of
+from .tap import STRING, Tapped, pub_qos_of
 
 RUN_INFO_KEY = "homeo.run"  # metadata.yaml custom_data: the run's settings as JSON
 BAG_VERSION = 9  # rosbag2 metadata version of ROS 2 Jazzy
@@ -114,7 +114,8 @@ class WriterBag:
 
         if self.spool_dir is None:
             os.makedirs(data_dir, exist_ok=True)
-            self.spool_dir = Path(tempfile.mkdtemp(prefix=".homeo-record-", dir=data_dir))
+            self.spool_dir = Path(tempfile.mkdtemp(prefix=SPOOL_PREFIX, dir=data_dir))
+            write_manifest(self.spool_dir, self.path, self.info, self.topics)
             self.own = SpoolWriter(self.spool_dir, "homeo_launch")
         return str(self.spool_dir)
 
@@ -129,26 +130,69 @@ class WriterBag:
 
         if self.spool_dir is None:
             return
-        from rosbags.typesys import Stores, get_typestore
-
-        from homeo_msgs_py.spool import TEXT, read_spools
-
         self.own.close()
-        records, torn = read_spools(self.spool_dir)
-        store = get_typestore(Stores.ROS2_JAZZY)
-        String = store.types["std_msgs/msg/String"]
-        by_name = {t.name: t for t in self.topics}
-        sink = BagSink(self.path, dict(self.info, recorded_at="writers", torn_bytes=torn), self.topics)
-        try:
-            for r in records:
-                t = by_name.get(r.topic)
-                if t is None:
-                    continue  # a topic outside the bag's list
-                raw = (bytes(store.serialize_cdr(String(data=r.payload.decode("utf-8")), t.msgtype))
-                       if r.kind == TEXT else r.payload)
-                sink.write(t, r.stamp_ns, raw)
-            self.count = sink.count
-        finally:
-            sink.close()
+        self.count = merge_spools(self.spool_dir, self.path, self.info, self.topics)
         shutil.rmtree(self.spool_dir, ignore_errors=True)
         self.spool_dir = None
+
+
+def merge_spools(spool_dir: Path, path: Path, info: dict, topics: list[Tapped]) -> int:
+    """The spools of ``spool_dir`` merged in the order sent into a new bag at ``path`` (as ``BagSink``
+    writes one); the number of messages written. Topics outside ``topics`` are left out."""
+    from rosbags.typesys import Stores, get_typestore
+
+    from homeo_msgs_py.spool import TEXT, read_spools
+
+    records, torn = read_spools(spool_dir)
+    store = get_typestore(Stores.ROS2_JAZZY)
+    String = store.types[STRING]
+    by_name = {t.name: t for t in topics}
+    raws, unreadable = [], 0
+    for r in records:
+        t = by_name.get(r.topic)
+        if t is None:
+            continue  # a topic outside the bag's list
+        if r.kind != TEXT:
+            raws.append((t, r.stamp_ns, r.payload))  # CDR as sent
+            continue
+        try:  # a String's text; a spool is a file on disk: it may have been spoilt
+            if t.msgtype != STRING:
+                raise ValueError("text on a topic that is not a std_msgs/String")
+            raws.append((t, r.stamp_ns, bytes(store.serialize_cdr(String(data=r.payload.decode("utf-8")), STRING))))
+        except ValueError:  # UnicodeDecodeError included
+            unreadable += 1
+    sink = BagSink(path, dict(info, recorded_at="writers", torn_bytes=torn, unreadable_records=unreadable), topics)
+    try:
+        for t, stamp, raw in raws:
+            sink.write(t, stamp, raw)
+    finally:
+        sink.close()
+    return sink.count
+
+
+# -- what a spool folder says of itself (for ``homeo-launch recover``) ---------------------------
+SPOOL_PREFIX = ".homeo-record-"  # the spool folders, inside the data directory
+MANIFEST = "bag.json"  # in a spool folder: the bag it is for, and what the merge needs
+MANIFEST_SCHEMA, MANIFEST_VERSION = "homeo-record-spool", 1
+
+
+def proc_start(pid: int) -> int | None:
+    """When process ``pid`` started (clock ticks since boot, /proc/PID/stat field 22; proc(5)), or
+    None if no such process runs (a zombie has ended): with the pid, it names one process, never a
+    later one given the same pid."""
+    try:
+        fields = Path(f"/proc/{int(pid)}/stat").read_text().rpartition(")")[2].split()  # fields 3.. follow ')'
+        return None if fields[0] in ("Z", "X") else int(fields[19])
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+def write_manifest(spool_dir: Path, path: Path, info: dict, topics: list[Tapped]) -> None:
+    """Written before any node appends: a launcher killed outright leaves a folder that says which
+    bag it was recording, how, and who was recording it (so a live recording is never taken)."""
+    from homeo_decision.jsonfile import write_atomic
+
+    write_atomic(spool_dir / MANIFEST, {
+        "schema": MANIFEST_SCHEMA, "version": MANIFEST_VERSION, "bag": str(Path(path).absolute()),
+        "launcher": [os.getpid(), proc_start(os.getpid())], "info": info,
+        "topics": [[t.key, t.name, t.msgtype, t.kind] for t in topics]}, UserError, "the recording's manifest")
