@@ -88,6 +88,14 @@ def test_a_live_recording_and_an_existing_bag_are_left_alone_with_one_line_each(
     assert recover_folder(dead).endswith(f"3 messages (from {dead.name})") and not dead.exists()
 
 
+def test_a_bag_that_cannot_be_written_is_one_line_and_the_folder_is_kept(tmp_path):
+    me = [os.getpid(), record.proc_start(os.getpid()) + 1]
+    folder = _left_folder(tmp_path, Path("/proc/self/bag"), me)  # /proc takes no new folder, even from root
+    with pytest.raises(NotRecovered, match=r"^.*: writing /proc/self/bag: .+$"):
+        recover_folder(folder)
+    assert folder.is_dir() and len(list(folder.glob("*.spool"))) == 2
+
+
 def test_a_folder_without_a_manifest_and_a_missing_data_dir_are_one_line(tmp_path):
     (tmp_path / (record.SPOOL_PREFIX + "old")).mkdir()
     r = _cli("recover", "--data-dir", tmp_path)

@@ -87,12 +87,14 @@ def recover_folder(folder: Path) -> str:
                            "move that away and run recover again")
     if not bag.parent.is_dir():
         raise NotRecovered(f"{folder}: the folder of its bag, {bag.parent}, is gone")
+    from rosbags.rosbag2 import WriterError
+
     try:
         n = merge_spools(folder, bag, info, topics)
     except BaseException as exc:  # Ctrl-C too: no half bag left to block a second try
         shutil.rmtree(bag, ignore_errors=True)
-        if isinstance(exc, OSError):
-            raise NotRecovered(f"{folder}: writing {bag}: {exc.strerror or exc}") from None
+        if isinstance(exc, (OSError, WriterError)):  # a full disk, a folder not writable
+            raise NotRecovered(f"{folder}: writing {bag}: {getattr(exc, 'strerror', None) or exc}") from None
         raise
     shutil.rmtree(folder, ignore_errors=True)
     return f"{bag}: {n} messages (from {folder.name})"
