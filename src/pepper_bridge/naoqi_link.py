@@ -331,6 +331,7 @@ class NaoqiLink:
                 s.close()
             except Exception:
                 pass
+            collect_closed_session()  # at this known point, not inside a later qi call
 
     def _set_state(self, state: str, reason: str) -> None:
         self.state, self.reason = state, reason
@@ -338,6 +339,16 @@ class NaoqiLink:
             self.on_status(self.status())
         except Exception:
             pass
+
+
+def collect_closed_session() -> None:
+    """Destroy now what a closed qi session left in reference cycles. Otherwise an automatic garbage
+    collection destroys it later, at whatever point it runs. With qi 3.1.5, that point was sometimes
+    inside another session's ``registerService``, and the process died there with a segfault:
+    tools/qi_stress.py reproduces it, see docs/PEPPER.md."""
+    import gc
+
+    gc.collect()
 
 
 def _cancel(fut) -> None:

@@ -1,0 +1,75 @@
+"""Open, use and close a stand-in Pepper and a bridge over libqi, again and again, in one process:
+what the in-process qi tests do one after another.
+
+    .venv/bin/python -X faulthandler tools/qi_stress.py [CYCLES] [--no-collect]
+
+Each cycle connects a bridge to a fresh stand-in, takes a step whose move the robot refuses, closes
+both, then opens a second pair and reads the body. It prints ``survived N cycles`` and leaves with
+``os._exit(0)``, because interpreter teardown with libqi threads alive is a separate matter.
+``--no-collect`` turns ``pepper_bridge.naoqi_link.collect_closed_session`` into a no-op. That is how
+the code behaved before: with qi 3.1.5 the process died with a segfault inside ``registerService``
+(docs/PEPPER.md); ``-X faulthandler`` shows where.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+import sys
+
+
+def main(argv: list[str]) -> int:
+    cycles = int(argv[0]) if argv and argv[0].isdigit() else 150
+    if "--no-collect" in argv:
+        from pepper_bridge import naoqi_link
+
+        naoqi_link.collect_closed_session = lambda: None
+        import pepper_bridge.standin as standin_mod
+
+        standin_mod.collect_closed_session = lambda: None
+    import qi
+
+    from homeo_decision.scenario import load_scenario
+    from pepper_bridge.bridge import PepperBridge
+    from pepper_bridge.config import LinkSettings, load_config
+    from pepper_bridge.environment import NotReady, PepperEnvironment
+    from pepper_bridge.mapping import BATTERY_KEY
+    from pepper_bridge.standin import StandinRobot
+
+    qi.logging.setLevel(qi.logging.WARNING)
+    sc, cfg = load_scenario(), load_config()
+    user = {"schema": "homeo-pepper-user", "version": 1,
+            "start": {"battery_percent": 40, "location": "R", "presence": "present"},
+            "interactions": [{"intention": "light", "gesture": "point_up", "words": ["light"]}]}
+
+    def pair():
+        robot = StandinRobot(cfg, copy.deepcopy(user), time_scale=0.0, scenario=sc)
+        bridge = PepperBridge(cfg, LinkSettings(url=robot.start()), sc)
+        assert bridge.start(10.0), bridge.status()
+        return robot, bridge, PepperEnvironment(bridge, quiet=0.15, window=2.0)
+
+    for i in range(cycles):
+        if i % 25 == 0:
+            print(f"cycle {i}", file=sys.stderr, flush=True)
+        robot, bridge, env = pair()
+        env.reset()
+        robot._motion = lambda x, y: False  # the robot refuses the move
+        assert env.step(sc.action_index("MoveToH")).action is None
+        bridge.stop()
+        robot.close()
+        robot, bridge, env = pair()
+        robot.inject(BATTERY_KEY, "abc")  # wrongly typed: no good value yet
+        try:
+            env.observe()
+        except NotReady:
+            pass
+        robot.clear_injections()
+        env.observe()
+        bridge.stop()
+        robot.close()
+    print(f"survived {cycles} cycles", flush=True)
+    os._exit(0)
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
