@@ -19,8 +19,20 @@ import sys
 
 
 def main(argv: list[str]) -> int:
-    cycles = int(argv[0]) if argv and argv[0].isdigit() else 150
-    if "--no-collect" in argv:
+    from homeo_msgs_py.cli_args import run_command
+
+    return run_command("qi_stress", lambda: stress(argv))
+
+
+def stress(argv: list[str]) -> int:
+    from homeo_msgs_py.cli_args import Parser, int_at_least
+
+    ap = Parser(prog="qi_stress", description="open, use and close a stand-in and a bridge CYCLES times")
+    ap.add_argument("cycles", nargs="?", type=int_at_least(1, 1_000_000), default=150, help="default 150")
+    ap.add_argument("--no-collect", action="store_true", help="as the code was: no collection at a session's close")
+    a = ap.parse_args(argv)
+    cycles = a.cycles
+    if a.no_collect:
         from pepper_bridge import naoqi_link
 
         naoqi_link.collect_closed_session = lambda: None
