@@ -24,21 +24,23 @@ def main(argv: list[str]) -> int:
     return run_command("qi_stress", lambda: stress(argv))
 
 
-def stress(argv: list[str]) -> int:
+def parse_args(argv: list[str]):
+    """``cycles`` (1..1,000,000, default 150) and ``no_collect``; a bad argument is a one-line UserError."""
     from homeo_msgs_py.cli_args import Parser, int_at_least
 
     ap = Parser(prog="qi_stress", description="open, use and close a stand-in and a bridge CYCLES times")
     ap.add_argument("cycles", nargs="?", type=int_at_least(1, 1_000_000), default=150, help="default 150")
     ap.add_argument("--no-collect", action="store_true", help="as the code was: no collection at a session's close")
-    a = ap.parse_args(argv)
+    return ap.parse_args(argv)
+
+
+def stress(argv: list[str]) -> int:
+    a = parse_args(argv)
     cycles = a.cycles
-    if a.no_collect:
+    if a.no_collect:  # the stand-in calls it through this module too
         from pepper_bridge import naoqi_link
 
         naoqi_link.collect_closed_session = lambda: None
-        import pepper_bridge.standin as standin_mod
-
-        standin_mod.collect_closed_session = lambda: None
     import qi
 
     from homeo_decision.scenario import load_scenario

@@ -180,10 +180,12 @@ def proc_start(pid: int) -> int | None:
     """When process ``pid`` started (clock ticks since boot, /proc/PID/stat field 22; proc(5)), or
     None if no such process runs (a zombie has ended): with the pid, it names one process, never a
     later one given the same pid."""
+    from .procfs import stat_fields
+
+    fields = stat_fields(int(pid))
     try:
-        fields = Path(f"/proc/{int(pid)}/stat").read_text().rpartition(")")[2].split()  # fields 3.. follow ')'
-        return None if fields[0] in ("Z", "X") else int(fields[19])
-    except (OSError, ValueError, IndexError):
+        return None if fields[0] in ("Z", "X") else int(fields[19])  # fields[0] is field 3
+    except (TypeError, ValueError, IndexError):  # TypeError: no such process
         return None
 
 

@@ -34,6 +34,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from .procfs import stat_fields
+
 SAMPLES = 40  # memory samples over a run
 
 
@@ -50,10 +52,10 @@ def rss_mb(pid: int | str = "self") -> float | None:
 def cpu_s(pid: int | str = "self") -> float | None:
     """User + system CPU seconds of a process so far (on a shared machine a steadier measure of
     the cost of a tick than the wall clock)."""
+    f = stat_fields(pid)
     try:
-        f = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
         return (int(f[11]) + int(f[12])) / os.sysconf("SC_CLK_TCK")
-    except (OSError, ValueError, IndexError):
+    except (TypeError, ValueError, IndexError):  # TypeError: no such process
         return None
 
 

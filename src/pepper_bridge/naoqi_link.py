@@ -19,6 +19,7 @@ holds its tick), the state is reported, and the first answer brings it back to `
 
 from __future__ import annotations
 
+import gc
 import threading
 
 from functools import partial
@@ -346,8 +347,6 @@ def collect_closed_session() -> None:
     collection destroys it later, at whatever point it runs. With qi 3.1.5, that point was sometimes
     inside another session's ``registerService``, and the process died there with a segfault:
     tools/qi_stress.py reproduces it, see docs/PEPPER.md."""
-    import gc
-
     gc.collect()
 
 

@@ -50,7 +50,7 @@ from homeo_decision.rng import component_rng
 from .config import PepperConfig, load_config
 from .mapping import (AUTO_NAOQI, BATTERY_KEY, EMOTION_EVENT, PEOPLE_KEY, PEPPER_JOINTS, PLUGGED_KEY, TOUCH_EVENTS,
                       WORD_EVENT, ZONE_KEYS, emotion_scale, temperature_key)
-from .naoqi_link import collect_closed_session
+from . import naoqi_link
 from .user import ScriptedUser, load_script, timed_entry_emits
 
 MOTION_JOINTS = ("HipRoll", "HipPitch", "KneePitch", "WheelFL", "WheelFR", "WheelB")
@@ -180,7 +180,7 @@ class StandinRobot:
         self._stop.set()
         self._thawed.set()  # release held calls
         self.drop()
-        collect_closed_session()
+        naoqi_link.collect_closed_session()
 
     # -- recording and injection ----------------------------------------------------
     def record(self, service: str, method: str, *args) -> None:
