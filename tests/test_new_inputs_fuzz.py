@@ -361,3 +361,19 @@ def test_record_from_is_writers_or_tap_or_refused(value, command):
         assert "--record-from" in str(exc) and "\n" not in str(exc) and value not in ("writers", "tap")
         return
     assert a.record_from == value in ("writers", "tap")
+
+
+@settings(max_examples=300, deadline=None)
+@example(argv=["sim", "\n"])
+@given(argv=st.lists(st.sampled_from(["sim", "pepper", "bench", "recover", "soak", "--iterations", "--data-dir"])
+                     | st.text(max_size=10), max_size=4))
+def test_any_launcher_command_line_parses_or_is_one_line_error(argv):
+    """The shared parser (cli_args.Parser): whatever is typed, a namespace or one line, even when the
+    text it quotes back holds a line break."""
+    from homeo_launch.cli import build_parser
+    from homeo_msgs_py.cli_args import UserError
+
+    try:
+        build_parser().parse_args(argv)
+    except UserError as exc:
+        assert "\n" not in str(exc) and "\r" not in str(exc)

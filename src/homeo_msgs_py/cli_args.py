@@ -12,8 +12,10 @@ class UserError(Exception):
 
 
 class Parser(argparse.ArgumentParser):
-    def error(self, message):  # one line, no usage dump
-        raise UserError(message)
+    def error(self, message):  # one line, no usage dump; argparse quotes what the user typed raw
+        from .schemas import one_line
+
+        raise UserError(one_line(message))
 
 
 def int_at_least(lo: int, hi: int | None = None):
