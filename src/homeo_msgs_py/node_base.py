@@ -103,6 +103,7 @@ class HomeoNode(Node):
         from rcl_interfaces.msg import ParameterDescriptor
 
         self._fixed: dict = {}  # parameters set at start: a change is refused, the same value accepted
+        self._specs: dict = {}  # name -> ParamSpec of the parameters declared from one (declare_specs)
         self._data_dir = self.declare_fixed("data_dir", data_dir.default_dir(), ParameterDescriptor(
             description="files named by parameters (paths) live here; set at start"))
         from rcl_interfaces.msg import IntegerRange
@@ -155,6 +156,23 @@ class HomeoNode(Node):
         self._fixed[name] = value
         return value
 
+    def declare_specs(self, specs) -> dict:
+        """Declare parameters from their declarations (``homeo_msgs_py.params.ParamSpec``): the
+        descriptor carries the doc and the range, a ``fixed`` one is set at start only. Returns
+        their values; a value the declaration refuses is a NodeConfigError (one line)."""
+        values = {}
+        for s in specs:
+            default = list(s.default) if isinstance(s.default, tuple) else s.default
+            declare = self.declare_fixed if s.fixed else self.declare_parameter
+            value = declare(s.name, default, descriptor(s))
+            value = value.value if hasattr(value, "value") else value
+            try:
+                values[s.name] = s.check(value)
+            except ValueError as exc:
+                raise NodeConfigError(f"parameter {exc}") from None
+            self._specs[s.name] = s
+        return values
+
     def _guard_fixed(self, params):
         from rcl_interfaces.msg import SetParametersResult
 
@@ -162,6 +180,12 @@ class HomeoNode(Node):
             if prm.name in self._fixed and prm.value != self._fixed[prm.name]:
                 return SetParametersResult(successful=False,
                                            reason=f"{prm.name} is set when the node starts (restart it to change it)")
+            spec = self._specs.get(prm.name)
+            if spec is not None:
+                try:
+                    spec.check(prm.value)  # choices, and what the descriptor cannot say
+                except ValueError as exc:
+                    return SetParametersResult(successful=False, reason=str(exc))
         return SetParametersResult(successful=True)
 
     # -- topics ---------------------------------------------------------------------
@@ -249,6 +273,23 @@ class HomeoNode(Node):
     def extra_statuses(self) -> list[dict]:
         """More DiagnosticStatus dicts (level, name, message, hardware_id, values) a node reports."""
         return []
+
+
+def descriptor(spec):
+    """The ROS ParameterDescriptor of a ``ParamSpec``: its doc (with the equation), its range."""
+    from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+
+    doc = spec.doc + (f" (Eq {spec.eq})" if spec.eq[:1].isdigit() else f" ({spec.eq})" if spec.eq else "")
+    if spec.choices:
+        doc += ": " + " | ".join(spec.choices)
+    d = ParameterDescriptor(description=doc)
+    if spec.kind is int and (spec.lo is not None or spec.hi is not None):
+        d.integer_range = [IntegerRange(from_value=int(spec.lo if spec.lo is not None else -2**63),
+                                        to_value=int(spec.hi if spec.hi is not None else 2**63 - 1), step=1)]
+    elif spec.kind is float and (spec.lo is not None or spec.hi is not None):
+        d.floating_point_range = [FloatingPointRange(from_value=float(spec.lo if spec.lo is not None else -1e308),
+                                                     to_value=float(spec.hi if spec.hi is not None else 1e308))]
+    return d
 
 
 def open_spool(base: str, folder, who: str):
