@@ -129,6 +129,6 @@ def markdown_table(specs, defaults: dict | None = None) -> str:
         shown = ", ".join(d) if isinstance(d, tuple) else repr(d) if isinstance(d, str) else str(d).lower() \
             if isinstance(d, bool) else f"{d:g}" if isinstance(d, float) else str(d)
         rows.append(f"| `{s.name}` | {s.kind.__name__ if s.kind is not tuple else 'string list'} | "
-                    f"{s.range_text() or '-'} | {shown or chr(39) * 2} | {'at start' if s.fixed else 'live'} | "
+                    f"{s.range_text().replace('|', chr(92) + '|') or '-'} | {shown or chr(39) * 2} | {'at start' if s.fixed else 'live'} | "
                     f"{s.eq or '-'} | {s.doc} |")
     return "\n".join(rows)
