@@ -121,13 +121,25 @@ def failure_report(proc, out: str, err: str, logs: Path) -> str:
         f"--- {f.name}\n{f.read_text(errors='replace')[-2500:]}" for f in sorted(logs.rglob("*.log")))
 
 
+WORLD_KEYS = ("iterations", "rate", "action_timeout", "human", "human_timeout")
+
+
+def sim_opts(**kw):
+    """``launch.GraphOptions`` of the simulated world, from the flat settings ``homeo-launch sim`` takes."""
+    from homeo_launch.launch import GraphOptions
+
+    world = {"iterations": kw.pop("iterations", 5000)}
+    world.update({k: kw.pop(k) for k in WORLD_KEYS if k in kw})
+    return GraphOptions(world=kw.pop("world", "sim"), world_params=world, **kw)
+
+
 @contextmanager
 def sim_graph(opts, domain: int):
-    """The four simulation nodes as processes on ``domain``; stopped and checked on exit."""
+    """The four nodes of the simulated graph as processes on ``domain``; stopped and checked on exit."""
+    from homeo_launch.launch import graph_specs
     from homeo_launch.processes import Graph, graph_env
-    from homeo_launch.sim import sim_specs
 
-    g = Graph(sim_specs(opts), graph_env(domain), namespace=opts.namespace, auth=opts.auth)
+    g = Graph(graph_specs(opts), graph_env(domain), namespace=opts.namespace, auth=opts.auth)
     g.start()
     try:
         yield g

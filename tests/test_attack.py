@@ -14,10 +14,9 @@ import time
 
 import pytest
 
-from rosgraph import Probe, fresh_domain, sim_graph
+from rosgraph import Probe, fresh_domain, sim_graph, sim_opts
 
 from homeo_launch.processes import graph_env
-from homeo_launch.sim import SimOptions
 
 pytestmark = pytest.mark.ros
 
@@ -120,7 +119,7 @@ def test_a_stranger_cannot_crash_wedge_or_steer_the_graph(tmp_path):
     p = subprocess.run([sys.executable, "-m", "homeo_sim.cli", "run", "--iterations", str(n), "--seed", str(seed),
                         "--intention", "bayes", "--json", "--quiet"], capture_output=True, text=True, timeout=120)
     assert p.returncode == 0, p.stderr
-    sim_log = [ln for ln in logs.get("homeo_sim.log", "").splitlines() if "no action" in ln or "missed" in ln]
+    sim_log = [ln for ln in logs.get("homeo_world.log", "").splitlines() if "no action" in ln or "missed" in ln]
     assert g.stdout == p.stdout, sim_log  # exactly the metrics of the same run without the attack
 
 
@@ -128,7 +127,7 @@ def test_a_stranger_cannot_crash_wedge_or_steer_the_graph(tmp_path):
 def test_a_forged_action_is_dropped_with_auth_and_executed_without(auth):
     """The decision node is paused, so the forged action is the only one for the tick."""
     d = fresh_domain()
-    with sim_graph(SimOptions(iterations=0, rate=5.0, action_timeout=30.0, auth=auth), d) as g:
+    with sim_graph(sim_opts(iterations=0, rate=5.0, action_timeout=30.0, auth=auth), d) as g:
         probe = Probe(d)
         try:
             outcomes, worlds = probe.collect("/homeo/outcome"), probe.collect("/homeo/world")

@@ -225,15 +225,15 @@ def test_a_drives_node_restored_mid_run_from_its_slots_perceives_exactly_as_the_
     from homeo_decision.hosts import PerceptionHost
     from homeo_msgs_py.graph import NODES, ORACLE
     from homeo_msgs_py.lockstep import DONE, LockstepDriver
-    from homeo_sim.world_side import SimWorldSide
+    from homeo_sim.world_backend import SimWorld
 
-    from test_graph_stages import Bus, graph_readers, robot_hosts
+    from homeo_launch.bus import Bus, graph_readers, robot_hosts
 
     def run(replace_at=None):
         from homeo_decision.codec import vocabulary
 
         bus = Bus(vocabulary(thesis), 0)
-        side = SimWorldSide(thesis, 3)
+        side = SimWorld(thesis, {"seed": 3})
         drv = LockstepDriver(side, bus.send, iterations=300)
         hosts, readers = robot_hosts(thesis, ORACLE, 3), graph_readers(False)
         ck = checkpoint.Checkpointer(str(tmp_path), "homeo_drives", 1, lambda: checkpoint.drives_checkpoint(
@@ -243,7 +243,7 @@ def test_a_drives_node_restored_mid_run_from_its_slots_perceives_exactly_as_the_
         while drv.state != DONE:
             for key, m in bus.drain():
                 for n in readers.get(key, []):
-                    if n == "homeo_sim":
+                    if n == "homeo_world":
                         actions.append(m.fields["action"])
                         drv.on_action(m)
                         continue

@@ -18,12 +18,12 @@ from homeo_decision.codec import vocabulary
 from homeo_decision.hosts import DecisionHost, PerceptionHost
 from homeo_intention.recognition import RecognitionHost
 from homeo_msgs_py.auth import Signer
-from homeo_msgs_py.graph import BAYES, GRAPHS, NODES, TOPICS
+from homeo_msgs_py.graph import BAYES, GRAPH, NODES, TOPICS
 from homeo_msgs_py.human_input import decode_human_input
 from homeo_msgs_py.lockstep import LockstepDriver
 from homeo_msgs_py.schemas import (ENVELOPE, MAX_REASON, SCHEMAS, Message, Rejected, Vocabulary, decode, encode,
                                    parse_json, short)
-from homeo_sim.world_side import SimWorldSide
+from homeo_sim.world_backend import SimWorld
 
 # JSON values with the shapes that crashed nodes before: huge integers, non-finite floats, lone
 # surrogates, deep nesting, long strings, wrong containers
@@ -37,10 +37,10 @@ JSON = st.recursive(SCALARS, lambda inner: st.lists(inner, max_size=4)
 
 def _sample_messages(sc) -> dict[str, list[str]]:
     """Real messages of each topic from a short run of the graph's logic (the bus of test_graph_stages)."""
-    from test_graph_stages import Bus, graph_readers, robot_hosts
+    from homeo_launch.bus import Bus, graph_readers, robot_hosts
 
     bus = Bus(vocabulary(sc), 0)
-    side = SimWorldSide(sc, 1, intention_accuracy=True)
+    side = SimWorld(sc, {"seed": 1, "intention_learns": True})
     sent: dict[str, list[str]] = {}
 
     def send(key, tick, fields, run=0):
@@ -53,7 +53,7 @@ def _sample_messages(sc) -> dict[str, list[str]]:
     for _ in range(40):
         for key, m in bus.drain():
             for n in readers.get(key, []):
-                if n == "homeo_sim":
+                if n == "homeo_world":
                     driver.on_action(m)
                 else:
                     for k, fields in hosts[n].stage.put(key, m):
@@ -66,7 +66,7 @@ def _sample_messages(sc) -> dict[str, list[str]]:
 def world(thesis):
     """Every node's handler, as the node wires it, on one scenario; and real messages to mutate."""
     voc = vocabulary(thesis)
-    side = SimWorldSide(thesis, 2, intention_accuracy=True)
+    side = SimWorld(thesis, {"seed": 2, "intention_learns": True})
     driver = LockstepDriver(side, lambda *a: None, iterations=50)
     driver.begin()
     intention = RecognitionHost(thesis, BAYES)
@@ -80,14 +80,14 @@ def world(thesis):
 
     drives, decision = PerceptionHost(thesis), DecisionHost(thesis, DecisionCore(thesis, 2))
     handlers = {
-        ("homeo_sim", "action"): driver.on_action,
+        ("homeo_world", "action"): driver.on_action,
         ("homeo_intention", "observation"): on_observation,
         ("homeo_intention", "outcome"): lambda m: intention.stage.put("outcome", m),
         **{("homeo_drives", k): (lambda m, k=k: drives.stage.put(k, m)) for k in ("world", "intention", "outcome")},
         ("homeo_decision", "drives"): lambda m: decision.stage.put("drives", m),
     }
     # every input of every node of the graph has its handler here
-    assert set(handlers) == {(n, i.topic) for n in GRAPHS["sim"] for i in NODES[n].reads(True)}
+    assert set(handlers) == {(n, i.topic) for n in GRAPH for i in NODES[n].reads(True)}
     return voc, handlers, _sample_messages(thesis)
 
 

@@ -254,13 +254,13 @@ def test_the_world_node_killed_mid_run_goes_on_with_the_same_run_and_counts_the_
                 "--trace", str(tmp_path / "trace.jsonl"), "--json", domain=d)
     err = ""
     try:
-        path = ck_dir / "homeo_sim.json"
+        path = ck_dir / "homeo_world.json"
         _wait_ticks(path, 100, p)
-        pid = child_pid(p.pid, "homeo_sim.node")
+        pid = child_pid(p.pid, "homeo_decision.world_node")
         assert pid is not None
         os.kill(pid, signal.SIGKILL)
         last = json.loads(path.read_text())  # the killed process's last checkpoint
-        assert probe.spin_until(lambda: diag.get("homeo_launch: supervision", {}).get("values") == {"homeo_sim": "1"},
+        assert probe.spin_until(lambda: diag.get("homeo_launch: supervision", {}).get("values") == {"homeo_world": "1"},
                                 60.0)
         out, err = p.communicate(timeout=240)
     finally:
@@ -268,10 +268,10 @@ def test_the_world_node_killed_mid_run_goes_on_with_the_same_run_and_counts_the_
         if p.poll() is None:
             p.kill()
             err = p.communicate()[1]
-    log = (logs / "homeo_sim.log").read_text() if (logs / "homeo_sim.log").exists() else ""
+    log = (logs / "homeo_world.log").read_text() if (logs / "homeo_world.log").exists() else ""
     assert p.returncode == 0, err[-3000:] + log[-3000:]
     res = json.loads(out)
-    assert res["restarts"] == {"homeo_sim": 1} and res["iterations"] == n
+    assert res["restarts"] == {"homeo_world": 1} and res["iterations"] == n
     assert res["metrics"]["HSR"]["per_seed"]
     m = re.search(r"going on with run (\d+) at tick (\d+)", log)
     assert m, log[-2000:]

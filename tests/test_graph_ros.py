@@ -15,10 +15,9 @@ from pathlib import Path
 
 import pytest
 
-from rosgraph import Probe, fresh_domain, sim_graph
+from rosgraph import Probe, fresh_domain, sim_graph, sim_opts
 
 from homeo_launch.processes import graph_env
-from homeo_launch.sim import SimOptions
 
 pytestmark = pytest.mark.ros
 
@@ -60,7 +59,7 @@ def test_launcher_prints_exactly_the_in_process_metrics_and_the_same_actions(tmp
 # -- parameters ---------------------------------------------------------------------------------
 def test_a_parameter_change_takes_effect_on_the_next_tick_and_bad_values_are_refused():
     d = fresh_domain()
-    with sim_graph(SimOptions(iterations=0, rate=20.0), d):
+    with sim_graph(sim_opts(iterations=0, rate=20.0), d):
         probe = Probe(d)
         try:
             actions = probe.collect("/homeo/action")
@@ -96,7 +95,7 @@ def test_save_reset_and_load_the_q_table_through_the_services(tmp_path):
 
     d = fresh_domain()
     q1, q_empty, q2 = (str(tmp_path / f) for f in ("q1.json", "empty.json", "q2.json"))
-    with sim_graph(SimOptions(iterations=150, save_q=q1, data_dir=str(tmp_path)), d):
+    with sim_graph(sim_opts(iterations=150, save_q=q1, data_dir=str(tmp_path)), d):
         probe = Probe(d)
         try:
             status = probe.collect("/homeo/run_status")
@@ -158,13 +157,13 @@ def test_garbage_on_every_input_topic_is_rejected_and_reported_while_the_run_goe
     from homeo_msgs_py.graph import TOPICS, key_of
 
     inputs = {  # topic -> the nodes that read it
-        "/homeo/action": ["homeo_sim"], "/homeo/drives": ["homeo_decision"],
+        "/homeo/action": ["homeo_world"], "/homeo/drives": ["homeo_decision"],
         "/homeo/world": ["homeo_drives"], "/homeo/observation": ["homeo_intention"],
         "/homeo/intention": ["homeo_drives"], "/homeo/outcome": ["homeo_drives"],
     }
     d = fresh_domain()
     # without authentication: every message reaches the decoder (with it, all are refused unsigned)
-    with sim_graph(SimOptions(iterations=0, rate=50.0, auth=False), d):
+    with sim_graph(sim_opts(iterations=0, rate=50.0, auth=False), d):
         probe = Probe(d)
         try:
             status = probe.collect("/homeo/run_status")
@@ -195,7 +194,7 @@ def test_garbage_on_every_input_topic_is_rejected_and_reported_while_the_run_goe
             assert probe.spin_until(reported, 20.0), json.dumps(diag, indent=1)
             sim = diag["homeo_sim: inputs"]["values"]
             assert "stale tick 0" in sim["last reason /homeo/action"]
-            for n, topics in (("homeo_sim", ["/homeo/action"]), ("homeo_drives", ["/homeo/world", "/homeo/outcome"])):
+            for n, topics in (("homeo_world", ["/homeo/action"]), ("homeo_drives", ["/homeo/world", "/homeo/outcome"])):
                 recent = " ".join(diag[f"{n}: inputs"]["values"][f"recent reasons {t}"] for t in topics)
                 for why in ("not JSON", "unknown schema", "version 99", "tick = -5 is below 0"):
                     assert why in recent, (n, why, recent)
@@ -273,7 +272,7 @@ def test_a_dead_node_is_named_and_the_rest_are_stopped():
     try:
         _wait_running(d)
         kids = _children(la.pid)
-        victim = next(k for k in kids if "homeo_sim.node" in Path(f"/proc/{k}/cmdline").read_text())
+        victim = next(k for k in kids if "homeo_decision.world_node" in Path(f"/proc/{k}/cmdline").read_text())
         os.kill(victim, signal.SIGKILL)
         out, err = la.communicate(timeout=20)
         assert la.returncode == 1
@@ -296,7 +295,7 @@ def test_homeo_topic_echo_list_pub_param_and_call():
     d = fresh_domain()
     r = _cli("homeo_launch.topic_cli", "pub", "/homeo/action", '{"action": "Dance"}', domain=d, timeout=60)
     assert r.returncode == 2 and "unknown action 'Dance'" in r.stderr and "Traceback" not in r.stderr
-    with sim_graph(SimOptions(iterations=0, rate=20.0), d):
+    with sim_graph(sim_opts(iterations=0, rate=20.0), d):
         _wait_running(d)
         r = _cli("homeo_launch.topic_cli", "echo", "/homeo/drives", "--count", "1", "--timeout", "30", domain=d)
         assert r.returncode == 0, r.stderr

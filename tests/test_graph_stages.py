@@ -15,73 +15,19 @@ from homeo_decision.agent import DecisionCore
 from homeo_decision.codec import vocabulary
 from homeo_decision.hosts import DecisionHost, PerceptionHost
 from homeo_intention.recognition import RecognitionHost
-from homeo_msgs_py.graph import BAYES, GRAPHS, NODES, ORACLE, TOPICS
+from homeo_launch.bus import Bus, BusGraph, graph_readers, robot_hosts
+from homeo_msgs_py.graph import BAYES, NODES, ORACLE
 from homeo_msgs_py.lockstep import DONE, LockstepDriver
-from homeo_msgs_py.schemas import decode, encode
 from homeo_sim.runner import RunConfig, run_episode
-from homeo_sim.world_side import SimWorldSide
-
-
-class Bus:
-    def __init__(self, voc, seed):
-        self.voc, self.rng, self.queue = voc, random.Random(seed), []
-
-    def send(self, key, tick, fields, run=0):
-        self.queue.append((key, encode(TOPICS[key].schema, tick, fields, run=run)))
-
-    def drain(self):
-        """Everything sent so far, in a shuffled order that keeps each topic's own order."""
-        by_topic = {}
-        for topic, text in self.queue:
-            by_topic.setdefault(topic, []).append(text)
-        self.queue = []
-        out = []
-        while by_topic:
-            topic = self.rng.choice(sorted(by_topic))
-            out.append((topic, decode(by_topic[topic].pop(0), self.voc)))
-            if not by_topic[topic]:
-                del by_topic[topic]
-        return out
-
-
-def graph_readers(learning: bool) -> dict:
-    """Topic key -> the nodes of the simulated graph that read it (``homeo_msgs_py.graph``)."""
-    readers: dict = {}
-    for n in GRAPHS["sim"]:
-        for i in NODES[n].reads(learning):
-            readers.setdefault(i.topic, []).append(n)
-    return readers
-
-
-def robot_hosts(sc, mode: str, seed: int) -> dict:
-    """The robot nodes' hosts, as the nodes build them."""
-    return {"homeo_intention": RecognitionHost(sc, mode), "homeo_drives": PerceptionHost(sc),
-            "homeo_decision": DecisionHost(sc, DecisionCore(sc, seed))}
+from homeo_sim.world_backend import SimWorld
 
 
 def run_bus_graph(sc, seed: int, iterations: int, shuffle_seed: int = 0, mode: str = ORACLE):
-    """The simulated graph of ``homeo_msgs_py.graph`` on the bus: the world node's driver and side,
-    and the robot nodes' hosts, routed by who reads what."""
-    bus = Bus(vocabulary(sc), shuffle_seed)
-    learning = mode == BAYES
-    side = SimWorldSide(sc, seed, intention_accuracy=learning)
-    driver = LockstepDriver(side, bus.send, iterations=iterations)
-    hosts, readers = robot_hosts(sc, mode, seed), graph_readers(learning)
-    actions = []
-    driver.begin()
-    while driver.state != DONE:
-        msgs = bus.drain()
-        assert msgs, f"the graph stalled at tick {driver.tick}"
-        for key, m in msgs:
-            for n in readers.get(key, []):
-                if n == "homeo_sim":
-                    if not m.fields.get("final"):
-                        actions.append(m.fields["action"])
-                    driver.on_action(m)
-                    continue
-                for k, fields in hosts[n].stage.put(key, m):
-                    bus.send(NODES[n].publishes[0], k, fields)
-    return actions, side.status(True)["metrics"]
+    """The graph of ``homeo_msgs_py.graph`` on the in-memory bus (``homeo_launch.bus``), shuffled."""
+    world = SimWorld(sc, {"seed": seed, "intention_learns": mode == BAYES})
+    g = BusGraph(world, iterations, mode=mode, seed=seed, shuffle=shuffle_seed)
+    g.run()
+    return g.actions, world.status(True)["metrics"]
 
 
 @pytest.mark.parametrize("shuffle_seed", [0, 1])
@@ -128,7 +74,7 @@ def test_the_driver_counts_a_tick_the_world_could_not_act_on_as_missed(thesis):
     """A world side that reports its last step as missed (a robot that was away) adds to the run's
     missed ticks, as a timeout does."""
     bus = Bus(vocabulary(thesis), 0)
-    side = SimWorldSide(thesis, 0)
+    side = SimWorld(thesis, {"seed": 0})
     driver = LockstepDriver(side, bus.send, iterations=3)
     noted = []
     driver.note = noted.append
@@ -166,7 +112,7 @@ def test_lost_messages_cost_one_timeout_each_and_nothing_else(thesis):
             return  # lost on the way
         send(key, tick, fields, run)
 
-    side = SimWorldSide(thesis, seed)
+    side = SimWorld(thesis, {"seed": seed})
     driver = LockstepDriver(side, lossy, iterations=n, timeout=5.0, clock=lambda: now[0])
     hosts, readers = robot_hosts(thesis, ORACLE, seed), graph_readers(False)
     stalls = 0
@@ -181,7 +127,7 @@ def test_lost_messages_cost_one_timeout_each_and_nothing_else(thesis):
             continue
         for key, m in msgs:
             for node in readers.get(key, []):
-                if node == "homeo_sim":
+                if node == "homeo_world":
                     try:
                         driver.on_action(m)
                     except Exception:  # noqa: BLE001 - a stale repeat is refused as on a real topic
@@ -202,7 +148,7 @@ def test_lost_messages_cost_one_timeout_each_and_nothing_else(thesis):
 def test_an_action_that_arrived_is_never_missed_at_any_rate(thesis):
     now = [0.0]
     bus = Bus(vocabulary(thesis), 0)
-    side = SimWorldSide(thesis, 0)
+    side = SimWorld(thesis, {"seed": 0})
     driver = LockstepDriver(side, bus.send, iterations=3, rate=0.1, timeout=1.0, clock=lambda: now[0])
     host = DecisionHost(thesis, DecisionCore(thesis, 0))
     drives, intention = PerceptionHost(thesis), RecognitionHost(thesis, ORACLE)

@@ -79,6 +79,33 @@ def test_nothing_imports_the_bringup_package():
     assert not bad
 
 
+def test_the_launcher_does_not_import_the_operations_tools():
+    """The operations tools (``homeo_launch.ops``: bench, soak, floor chain, recover) sit apart:
+    only the command line (``homeo_launch.cli``) and they themselves import them."""
+    bad = [f"{m} imports {d}" for m, deps in _graph().items()
+           if m.startswith("homeo_launch") and not m.startswith("homeo_launch.ops") and m != "homeo_launch.cli"
+           for d in deps if d.startswith("homeo_launch.ops")]
+    assert not bad, "\n".join(bad)
+
+
+def _calls(name: str) -> list[str]:
+    """The source files that call ``name(...)`` (a class built, a function called)."""
+    out = []
+    for f in sorted(SRC.rglob("*.py")):
+        for node in ast.walk(ast.parse(f.read_text(), str(f))):
+            if isinstance(node, ast.Call) and getattr(node.func, "id", getattr(node.func, "attr", None)) == name:
+                out.append(str(f.relative_to(SRC)))
+                break
+    return out
+
+
+def test_one_world_host_builds_the_lockstep_driver():
+    """Every world runs on one host (issue 22): the lockstep driver is built in the world host alone,
+    which the world node and the in-memory bus runner share."""
+    assert _calls("LockstepDriver") == ["homeo_decision/world_host.py"]
+    assert sorted(_calls("WorldHost")) == ["homeo_decision/world_node.py", "homeo_launch/bus.py"]
+
+
 def test_the_module_import_graph_has_no_cycle():
     g = _graph()
     # a package's __init__ re-exporting its own modules is not a cycle through them

@@ -155,7 +155,7 @@ def test_any_answer_to_system_version_has_a_scale_or_is_refused(value):
 # -- the world's and the drives node's checkpoints (issue 12, the world node restarted) ----------------
 @pytest.fixture(scope="module")
 def world_ck(thesis):
-    """A simulation node's checkpoint after 20 ticks (its streams drawn from), as the file holds it."""
+    """The world node's checkpoint of a simulation after 20 ticks (its streams drawn from), as the file holds it."""
     from test_world_checkpoint import world_at_tick_20
 
     return world_at_tick_20(thesis, 5)
@@ -182,22 +182,26 @@ def _mutate(data, ck: dict, places) -> dict:
                                                                    HealthCheck.function_scoped_fixture])
 @given(data=st.data())
 def test_a_world_checkpoint_with_any_field_changed_restores_whole_or_not_at_all(thesis, world_ck, data, tmp_path):
-    from homeo_sim.checkpoint import restore_world
-    from homeo_sim.world_side import SimWorldSide
+    from test_world_checkpoint import sim_host
 
-    ck, ours = world_ck
-    bad = _mutate(data, ck, ["params", "rng", "rng.human", "rng.observation", "state", "state.env", "state.env.human",
-                             "state.metrics", "state.accuracy", "state.pending", "state.position",
-                             "state.position.outcome", "ticks", "run"])
-    side = SimWorldSide(thesis, 1, intention_accuracy=True)
-    before = json.dumps([side.env.state(), side.rec.state(), side.hits.state(), side.pending_truth])
-    f = tmp_path / "homeo_sim.json"
+    bad = _mutate(data, world_ck, ["params", "rng", "rng.human", "rng.observation", "state", "state.world",
+                                   "state.world.env", "state.world.env.human", "state.world.metrics",
+                                   "state.world.accuracy", "state.world.pending", "state.position",
+                                   "state.position.outcome", "ticks", "run"])
+    host = sim_host(thesis, 1, lambda *a: None, 40)
+    side = host.world
+
+    def now():
+        return json.dumps([side.state(), host.driver.position(), host.driver.iterations])
+
+    before = now()
+    f = tmp_path / "homeo_world.json"
     f.write_text(json.dumps(bad))
     try:
-        restore_world(side, load(f, "homeo_sim"), ours, "f")
+        host.restore(load(f, "homeo_world"), "f")
     except CheckpointError as exc:
         assert "\n" not in str(exc) and len(str(exc)) < 2000
-        assert json.dumps([side.env.state(), side.rec.state(), side.hits.state(), side.pending_truth]) == before
+        assert now() == before
 
 
 @settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow,
@@ -243,43 +247,49 @@ def test_any_slot_file_loads_or_is_a_one_line_error(tmp_path, content, at):
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow,
                                                                    HealthCheck.function_scoped_fixture])
 @given(data=st.data())
-def test_a_bridge_checkpoint_with_any_field_changed_restores_whole_or_not_at_all(thesis, data, tmp_path):
-    """The bridge's side as the node builds it (not connected: restoring touches no robot)."""
+def test_a_bridge_checkpoint_with_any_field_changed_restores_whole_or_not_at_all(thesis, pepper_host, data, tmp_path):
+    """The Pepper world as the node builds it (not connected: restoring touches no robot)."""
     from homeo_decision import codec
     from homeo_decision.environment import Outcome
-    from pepper_bridge.bridge import PepperBridge
-    from pepper_bridge.checkpoint import bridge_checkpoint, restore_bridge, run_config
-    from pepper_bridge.config import LinkSettings, load_config
-    from pepper_bridge.environment import PepperEnvironment
-    from pepper_bridge.world_side import PepperWorldSide
 
-    def side():
-        return PepperWorldSide(PepperEnvironment(PepperBridge(load_config(scenario=thesis),
-                                                              LinkSettings(url="tcp://127.0.0.1:1"), thesis)))
-
-    src = side()
-    src.env.tick = 3
-    src.log = [{"interaction": k, "action": "Wait", "ok": True, "missed": False, "feedback": 0, "proposal": None,
-                "m_dom": "Social", "intention": None, "reason": None, "cue_intention": None} for k in (1, 2, 3)]
-    pos = {"run": 0, "tick": 3, "missed": 0, "iterations": 10, "done": False, "started": True, "elapsed": 1.5,
-           "outcome": [2, codec.outcome_fields(thesis, Outcome(None, 0, None, None, None))]}
-    ck = json.loads(json.dumps(bridge_checkpoint(src, pos, run_config(thesis, 10))))
-    bad = _mutate(data, ck, ["params", "state", "state.log", "state.position", "state.position.outcome",
-                             "state.interactions_done", "ticks"])
-    s = side()
-    f = tmp_path / "pepper_bridge.json"
+    host = pepper_host
+    w = host.world
+    w.env.tick = 3
+    w.log = [{"interaction": k, "action": "Chat", "ok": True, "missed": False, "feedback": 0, "proposal": None,
+              "m_dom": "Social", "intention": None, "reason": None, "cue_intention": None} for k in (1, 2, 3)]
+    host.driver.rejoin(0, 3, 0, 1.5, (2, codec.outcome_fields(thesis, Outcome(None, 0, None, None, None))))
+    ck = json.loads(json.dumps(host.checkpoint()))
+    bad = _mutate(data, ck, ["params", "state", "state.world", "state.world.log", "state.position",
+                             "state.position.outcome", "state.world.interactions_done", "ticks"])
+    w.log, w.env.tick = [], 0
+    host.driver.restart()
+    f = tmp_path / "homeo_world.json"
     f.write_text(json.dumps(bad))  # Infinity and NaN too, as a hostile file may hold them
     try:
-        restore_bridge(s, load(f, "pepper_bridge"), run_config(thesis, 10), "f")
+        host.restore(load(f, "homeo_world"), "f")
     except CheckpointError as exc:
         assert "\n" not in str(exc) and len(str(exc)) < 2000
-        assert s.log == [] and s.env.tick == 0
+        assert w.log == [] and w.env.tick == 0 and host.driver.tick == 0
+
+
+@pytest.fixture(scope="module")
+def pepper_host(thesis):
+    """One Pepper world for every example (its link to a port where no robot listens retries in the
+    background; a qi session per example would only slow the test down)."""
+    from homeo_decision.world_host import WorldHost
+    from pepper_bridge.world_backend import PepperWorld
+
+    values = {s.name: s.default for s in PepperWorld.PARAMS}
+    values["qi_url"] = "tcp://127.0.0.1:1"
+    world = PepperWorld(thesis, values)
+    yield WorldHost(world, lambda *a: None, iterations=10)
+    world.close()
 
 
 @FAST
 @given(path=st.text(max_size=30) | st.sampled_from(["", ".", "/", "/proc/x/y", "no/such/dir/f.json", "ok.json"]))
 def test_the_soak_samples_file_is_writable_or_a_one_line_refusal(tmp_path, path):
-    from homeo_launch.soak import check_samples_file
+    from homeo_launch.ops.soak import check_samples_file
     from homeo_msgs_py.cli_args import UserError
 
     full = os.path.join(str(tmp_path), path) if path and not path.startswith("/") else path

@@ -12,9 +12,8 @@ from __future__ import annotations
 import pytest
 import yaml
 
-from rosgraph import Probe, fresh_domain, sim_graph
+from rosgraph import Probe, fresh_domain, sim_graph, sim_opts
 
-from homeo_launch.sim import SimOptions
 
 pytestmark = pytest.mark.ros
 
@@ -38,12 +37,12 @@ def _dump(probe, client, node: str) -> str:
     return yaml.dump({node: {"ros__parameters": out}}, default_flow_style=False)
 
 
-@pytest.mark.parametrize("node", ["/homeo_sim", "/homeo_intention", "/homeo_drives", "/homeo_decision"])
+@pytest.mark.parametrize("node", ["/homeo_world", "/homeo_intention", "/homeo_drives", "/homeo_decision"])
 def test_dump_then_load_sets_every_parameter(tmp_path, node):
     from rclpy.parameter_client import AsyncParameterClient
 
     d = fresh_domain()
-    with sim_graph(SimOptions(iterations=0, rate=5.0, overrides=(("initial_q", 0.5),), data_dir=str(tmp_path)), d):
+    with sim_graph(sim_opts(iterations=0, rate=5.0, overrides=(("initial_q", 0.5),), data_dir=str(tmp_path)), d):
         probe = Probe(d)
         try:
             client = AsyncParameterClient(probe.node, node)

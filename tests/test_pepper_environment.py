@@ -103,7 +103,7 @@ from pepper_bridge.config import LinkSettings  # noqa: E402
 from pepper_bridge.environment import NotReady, PepperEnvironment  # noqa: E402
 from pepper_bridge.mapping import BATTERY_KEY, temperature_key  # noqa: E402
 from pepper_bridge.standin import StandinRobot  # noqa: E402
-from pepper_bridge.world_side import PepperWorldSide  # noqa: E402
+from pepper_bridge.world_backend import PepperWorld  # noqa: E402
 
 qi.logging.setLevel(qi.logging.WARNING)
 CFG = load_config()
@@ -194,11 +194,11 @@ def test_failed_move_is_no_effect(world, thesis, how, reason):
     assert out.action is None and reason in out.failure
     assert env.last_row["ok"] is False and env.last_row["action"] == "MoveToH" and reason in env.last_row["reason"]
     assert view(sc, env.observe())["robot.location"] == "R"  # the robot did not move
-    from homeo_launch.pepper import _row_line, done_note  # the printed table says so
+    from homeo_launch.pepper import done_note, row_line  # the printed table says so
 
     row = dict(env.last_row, m_dom="NEng", intention="come")
     assert done_note(row).startswith("FAILED: ") and reason in done_note(row)
-    assert _row_line(row).split()[3:4] == ["MoveToH"] and "FAILED" in _row_line(row)
+    assert row_line(row).split()[3:4] == ["MoveToH"] and "FAILED" in row_line(row)
     from homeo_launch.field import FieldResult, format_table
 
     table = format_table(FieldResult("robot", 0.25, 0, log=[row], user_log=[]))
@@ -214,9 +214,22 @@ def test_no_valid_body_reading_yet_is_not_ready(world):
     assert env.observe().readings["battery_percent"] == pytest.approx(40.0)
 
 
-def test_world_side_fields_and_log(world):
-    robot, bridge, env = world()
-    side = PepperWorldSide(env)
+@pytest.fixture
+def pepper_world(thesis):
+    """The Pepper world as the world node builds it, on a stand-in (time frozen) with the scripted user."""
+    robot = StandinRobot(CFG, copy.deepcopy(USER), time_scale=0.0, scenario=thesis)
+    values = dict({s.name: s.default for s in PepperWorld.PARAMS}, qi_url=robot.start(), collect_window=2.0)
+    side = PepperWorld(thesis, values)
+    try:
+        assert side.bridge.wait_connected(10.0), side.bridge.status()
+        yield robot, side
+    finally:
+        side.close()
+        robot.close()
+
+
+def test_world_fields_and_log(pepper_world):
+    robot, side = pepper_world
     side.start()
     w, seen = side.observe(False)
     assert w["robot"] == {"location": "R"} and w["objects"]["light"] == {"status": "off"}

@@ -17,7 +17,7 @@ qi = pytest.importorskip("qi")
 
 from rosgraph import Probe, child_pid, failure_report, fresh_domain  # noqa: E402
 
-from homeo_launch.pepper import pepper_specs  # noqa: E402
+from homeo_launch.launch import GraphOptions, graph_specs  # noqa: E402
 from homeo_launch.processes import Graph, graph_env  # noqa: E402
 from pepper_bridge.config import load_config  # noqa: E402
 from pepper_bridge.mapping import BATTERY_KEY, EMOTION_EVENT, TOUCH_EVENTS, WORD_EVENT  # noqa: E402
@@ -26,7 +26,7 @@ from pepper_bridge.standin import StandinRobot  # noqa: E402
 pytestmark = [pytest.mark.ros, pytest.mark.qi]
 qi.logging.setLevel(qi.logging.ERROR)
 START_S = 60.0
-ROBOT = "pepper_bridge: robot"
+ROBOT = "homeo_world: robot"
 NRES = {0: 0.0, 1: 50.0, 2: 80.0, 3: 100.0}  # Table 4.6
 
 LAUNCH = ("import sys; from homeo_msgs_py.cli_args import Parser; from homeo_launch.pepper import add_parser, cmd_pepper;"
@@ -127,8 +127,9 @@ def live():
     d = fresh_domain()
     robot = StandinRobot(load_config(), None, battery=40.0, time_scale=0.0)
     url = robot.start()
-    specs = pepper_specs(url=url, scenario="", overrides={}, seed=0, dod=None, q_table=None, interactions=0,
-                         collect_window=0.6, collect_quiet=0.6, action_timeout=5.0, end_with_script=False)
+    # the Pepper world as homeo-launch pepper starts it (the cues name the intention), unsupervised
+    specs = graph_specs(GraphOptions(world="pepper", intention="oracle", max_restarts=0, world_params={
+        "iterations": 0, "qi_url": url, "collect_window": 0.6, "collect_quiet": 0.6, "action_timeout": 5.0}))
     g = Graph(specs, graph_env(d))
     g.start()
     probe = Probe(d)
@@ -147,7 +148,7 @@ def live():
     probe.node.create_subscription(DiagnosticArray, "/diagnostics", on_diag, 50)
     try:
         assert probe.spin_until(lambda: len(state["outcomes"]) >= 2, START_S), \
-            f"no interactions; bridge log:\n{g.log_tail('pepper_bridge', 30)}"
+            f"no interactions; bridge log:\n{g.log_tail('homeo_world', 30)}"
         yield state
     finally:
         probe.close()
@@ -300,21 +301,21 @@ def test_the_bridge_killed_mid_session_is_restarted_and_the_session_completes(tm
     out = err = ""
     last = None
     try:
-        path = ck_dir / "pepper_bridge.json"
+        path = ck_dir / "homeo_world.json"
         end = time.monotonic() + 120
         while time.monotonic() < end and p.poll() is None:
             try:
-                last = checkpoint.load(path, "pepper_bridge")
+                last = checkpoint.load(path, "homeo_world")
                 if last["ticks"] >= 4:
                     break
             except checkpoint.CheckpointError:
                 pass
             time.sleep(0.1)
         assert last is not None and last["ticks"] >= 4, "the bridge never checkpointed 4 interactions"
-        pid = child_pid(p.pid, "pepper_bridge.node")
+        pid = child_pid(p.pid, "homeo_decision.world_node")
         assert pid is not None, "the bridge process was not found"
         os.kill(pid, signal.SIGKILL)
-        last = checkpoint.load(path, "pepper_bridge")
+        last = checkpoint.load(path, "homeo_world")
         out, err = p.communicate(timeout=240)
     finally:
         if p.poll() is None:
@@ -323,13 +324,13 @@ def test_the_bridge_killed_mid_session_is_restarted_and_the_session_completes(tm
         report = failure_report(p, out, err, logs)
     assert p.returncode == 0, report
     res = json.loads(out)
-    assert res["restarts"] == {"pepper_bridge": 1}, report
+    assert res["restarts"] == {"homeo_world": 1}, report
     nums = [r["interaction"] for r in res["log"]]
     assert nums == sorted(set(nums)) and nums[-1] == n, report  # each once, in order, to the end
     lost = n - len(nums)  # the interactions after the checkpoint, before the restarted bridge went on
     assert nums[:last["ticks"]] == list(range(1, last["ticks"] + 1)), report
     assert res["missed"] >= lost, report
-    bridge_log = (logs / "pepper_bridge.log").read_text()
+    bridge_log = (logs / "homeo_world.log").read_text()
     assert "going on with run 0 at tick" in bridge_log, report
 
 

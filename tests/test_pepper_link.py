@@ -166,7 +166,7 @@ def test_launcher_exits_2_with_one_line_within_the_bound(what):
 
 
 def test_probe_names_an_unknown_host_without_asking_a_name_server(monkeypatch):
-    from homeo_launch import pepper as launcher
+    from pepper_bridge import launch_support as launcher
 
     def no_such_host(*a, **k):
         raise socket.gaierror(socket.EAI_NONAME, "Name or service not known")
@@ -177,7 +177,7 @@ def test_probe_names_an_unknown_host_without_asking_a_name_server(monkeypatch):
 
 
 def test_probe_accepts_the_standin():
-    from homeo_launch import pepper as launcher
+    from pepper_bridge import launch_support as launcher
 
     robot = StandinRobot(CFG, None, time_scale=0.0)
     try:

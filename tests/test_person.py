@@ -101,13 +101,12 @@ def test_person_human_waits_then_answers_and_silence_is_no_intention(thesis):
 def test_a_person_drives_the_graph_praise_proposal_and_silence(tmp_path, thesis):
     from std_srvs.srv import Trigger
 
-    from rosgraph import Probe, fresh_domain, sim_graph
+    from rosgraph import Probe, fresh_domain, sim_graph, sim_opts
 
-    from homeo_launch.sim import SimOptions
-
+    
     d = fresh_domain()
     q_file = tmp_path / "q.json"
-    opts = SimOptions(iterations=3, intention="oracle", human="person", human_timeout=1.5, save_q=str(q_file),
+    opts = sim_opts(iterations=3, intention="oracle", human="person", human_timeout=1.5, save_q=str(q_file),
                       data_dir=str(tmp_path))
     with sim_graph(opts, d):
         probe = Probe(d)

@@ -20,7 +20,7 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from homeo_launch import record
-from homeo_launch.recover import NotRecovered, recover_folder
+from homeo_launch.ops.recover import NotRecovered, recover_folder
 from homeo_launch.tap import tapped_topics
 from homeo_msgs_py.spool import CDR, TEXT, SpoolWriter
 
@@ -47,7 +47,7 @@ def _left_folder(data: Path, bag: Path, launcher: list) -> Path:
     m = json.loads((folder / record.MANIFEST).read_text())
     m["launcher"] = launcher
     (folder / record.MANIFEST).write_text(json.dumps(m))
-    a, b = SpoolWriter(folder, "homeo_decision"), SpoolWriter(folder, "homeo_sim")
+    a, b = SpoolWriter(folder, "homeo_decision"), SpoolWriter(folder, "homeo_world")
     a.text("/homeo/action", '{"tick":0}', stamp_ns=10)
     b.text("/homeo/world", '{"tick":1}', stamp_ns=15)
     a.text("/homeo/action", '{"tick":1}', stamp_ns=20)
@@ -179,7 +179,7 @@ def test_a_launcher_killed_outright_leaves_a_folder_that_recover_turns_into_a_re
                             env=graph_env(fresh_domain()), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         wait_spooled_actions(tmp_path, proc, 50)
-        nodes = [child_pid(proc.pid, m) for m in ("homeo_decision.node", "homeo_sim.node")]
+        nodes = [child_pid(proc.pid, m) for m in ("homeo_decision.node", "homeo_decision.world_node")]
         os.kill(proc.pid, signal.SIGKILL)
         proc.communicate(timeout=30)
         end = time.monotonic() + 30

@@ -106,7 +106,7 @@ def test_the_merged_bag_reads_back_with_an_independent_reader(tmp_path):
     bag = WriterBag(tmp_path / "bag", {"graph": "sim"}, topics)
     spool = bag.prepare(str(tmp_path / "data"))
     assert spool.startswith(str(tmp_path / "data"))
-    sim, dec = SpoolWriter(spool, "homeo_sim"), SpoolWriter(spool, "homeo_decision")
+    sim, dec = SpoolWriter(spool, "homeo_world"), SpoolWriter(spool, "homeo_decision")
     sim.text("/homeo/world", '{"tick": 0}', 100)
     dec.text("/homeo/action", '{"tick": 0, "action": "Chat"}', 200)
     arr = DiagnosticArray(status=[DiagnosticStatus(name="homeo_decision: inputs", message="ok")])

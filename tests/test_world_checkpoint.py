@@ -11,19 +11,19 @@ import pytest
 
 from homeo_decision.checkpoint import CheckpointError, load, save
 from homeo_msgs_py.graph import BAYES, NODES
-from homeo_msgs_py.lockstep import DONE, LockstepDriver
+from homeo_msgs_py.lockstep import DONE
 from homeo_msgs_py.rejoin import make_rejoinable
 from homeo_msgs_py.schemas import Message
 from homeo_msgs_py.world_rejoin import RejoinPoint
-from homeo_sim.checkpoint import restore_world, run_config, world_checkpoint
-from homeo_sim.world_side import SimWorldSide
+from homeo_decision.world_host import WorldHost
+from homeo_sim.world_backend import SimWorld
 
-from test_graph_stages import Bus, graph_readers, robot_hosts
+from homeo_launch.bus import Bus, graph_readers, robot_hosts
 
 
-def _config(sc, side, drv):
-    return run_config(sc, seed=side.env.seed, iterations=drv.iterations, rate=drv.rate, action_timeout=drv.timeout,
-                      intention_accuracy=side.intention_accuracy, human="sim")
+def sim_host(sc, seed: int, send, iterations: int) -> WorldHost:
+    """The world node's host of the simulation, as the node builds it (the bayes mode: accuracy scored)."""
+    return WorldHost(SimWorld(sc, {"seed": seed, "intention_learns": True}), send, iterations=iterations)
 
 
 class ScriptedRobot:
@@ -50,17 +50,15 @@ def _drive(drv, robot, sent, until=None):
         drv.on_action(robot.answer(drv, drv.tick))
 
 
-def world_at_tick_20(sc, seed: int) -> tuple[dict, dict]:
-    """The checkpoint a world run of 40 ticks writes as it steps tick 20 (JSON round-tripped), and the
-    run's config."""
-    side = SimWorldSide(sc, seed, intention_accuracy=True)
-    drv = LockstepDriver(side, lambda *a: None, iterations=40)
+def world_at_tick_20(sc, seed: int) -> dict:
+    """The checkpoint a world run of 40 ticks writes as it steps tick 20 (JSON round-tripped)."""
+    host = sim_host(sc, seed, lambda *a: None, 40)
+    drv = host.driver
     got = {}
-    drv.on_step = lambda k: got.update(ck=json.loads(json.dumps(world_checkpoint(side, drv.position(),
-                                                                                 _config(sc, side, drv)))))
+    drv.on_step = lambda k: got.update(ck=json.loads(json.dumps(host.checkpoint())))
     drv.begin()
     _drive(drv, ScriptedRobot(sc), [], until=20)
-    return got["ck"], _config(sc, side, drv)
+    return got["ck"]
 
 
 def test_a_world_restored_from_its_checkpoint_goes_on_exactly_as_one_that_never_stopped(thesis, tmp_path):
@@ -70,23 +68,22 @@ def test_a_world_restored_from_its_checkpoint_goes_on_exactly_as_one_that_never_
     n, at = 300, 137
     robot = ScriptedRobot(thesis)
     ref_sent: list = []
-    side = SimWorldSide(thesis, 11, intention_accuracy=True)
-    drv = LockstepDriver(side, lambda k, t, f, r: ref_sent.append((k, t, json.dumps(f, sort_keys=True))),
-                         iterations=n)
-    path = tmp_path / "homeo_sim.json"
-    drv.on_step = lambda k: save(path, world_checkpoint(side, drv.position(), _config(thesis, side, drv))) \
-        if k == at else None
+    host = sim_host(thesis, 11, lambda k, t, f, r: ref_sent.append((k, t, json.dumps(f, sort_keys=True))), n)
+    side, drv = host.world, host.driver
+    path = tmp_path / "homeo_world.json"
+    drv.on_step = lambda k: save(path, host.checkpoint()) if k == at else None
     drv.begin()
     _drive(drv, robot, ref_sent)
     ref_metrics = side.status(True)["metrics"]
 
     sent: list = []
-    side2 = SimWorldSide(thesis, 11, intention_accuracy=True)  # a new process: the same parameters
-    drv2 = LockstepDriver(side2, lambda k, t, f, r: sent.append((k, t, json.dumps(f, sort_keys=True))), iterations=n)
-    ck = load(path, "homeo_sim")
-    cfg, pos = restore_world(side2, ck, _config(thesis, side2, drv2), str(path))
-    assert pos["tick"] == at and cfg["iterations"] == n
-    drv2.rejoin(pos["run"], pos["tick"], pos["missed"], pos["elapsed"], pos["outcome"])
+    # a new process: the same parameters
+    host2 = sim_host(thesis, 11, lambda k, t, f, r: sent.append((k, t, json.dumps(f, sort_keys=True))), n)
+    side2, drv2 = host2.world, host2.driver
+    ck = load(path, "homeo_world")
+    pos = host2.restore(ck, str(path))
+    assert pos["tick"] == at and drv2.iterations == n
+    host2.go_on(pos["run"], pos["tick"], pos, 0)
     _drive(drv2, robot, sent)
     # from the re-sent outcome of tick at-1 on, every message is the uninterrupted run's
     first = ref_sent.index(sent[0])
@@ -96,11 +93,11 @@ def test_a_world_restored_from_its_checkpoint_goes_on_exactly_as_one_that_never_
 
 
 def test_the_streams_go_on_from_the_saved_state(thesis):
-    side = SimWorldSide(thesis, 4)
+    side = SimWorld(thesis, {"seed": 4})
     for t in range(50):
         side.env.step(t % len(thesis.action_names))
     st = json.loads(json.dumps(side.env.state()))
-    other = SimWorldSide(thesis, 4)
+    other = SimWorld(thesis, {"seed": 4})
     other.env.set_state(st)
     ahead = [(side.env.human.rng.random(), side.env.human.obs_rng.random()) for _ in range(5000)]
     assert [(other.env.human.rng.random(), other.env.human.obs_rng.random()) for _ in range(5000)] == ahead
@@ -118,14 +115,13 @@ def _bus_run(sc, seed, n, kill_at=None, every=25, kill_phase=0):
     latched: dict = {}  # topic key -> the newest message a robot node published (a state topic)
 
     def make_world():
-        side = SimWorldSide(sc, seed, intention_accuracy=True)
-        drv = LockstepDriver(side, bus.send, iterations=n)
+        host = sim_host(sc, seed, bus.send, n)
         ck = {}
-        drv.on_step = lambda k: ck.update(file=json.loads(json.dumps(
-            world_checkpoint(side, drv.position(), _config(sc, side, drv))))) if k % every == 0 else None
-        return side, drv, ck
+        host.driver.on_step = lambda k: ck.update(file=json.loads(json.dumps(host.checkpoint()))) \
+            if k % every == 0 else None
+        return host, host.world, host.driver, ck
 
-    side, drv, ck = make_world()
+    host, side, drv, ck = make_world()
     drv.begin()
     lost = None
     while drv.state != DONE:
@@ -136,15 +132,14 @@ def _bus_run(sc, seed, n, kill_at=None, every=25, kill_phase=0):
                 while bus.queue:  # they went out and the robot answered: to a world that is gone
                     _deliver(bus, hosts, readers, latched, None)
             old = ck["file"]
-            side, drv, ck = make_world()
-            cfg, pos = restore_world(side, old, _config(sc, side, drv))
+            host, side, drv, ck = make_world()
+            pos = host.restore(old)
             point = RejoinPoint(pos["run"], pos["tick"])
             for key, m in latched.items():
                 point.put(key, m)
             run, tick = point.where(n)
             lost = tick - pos["tick"]
-            outcome = (tick - 1, side.skip(lost)) if lost else pos["outcome"]
-            drv.rejoin(run, tick, pos["missed"] + lost, pos["elapsed"], outcome)
+            host.go_on(run, tick, pos, lost)
             continue
         assert bus.queue, f"the graph stalled at tick {drv.tick}"
         _deliver(bus, hosts, readers, latched, drv)
@@ -154,7 +149,7 @@ def _bus_run(sc, seed, n, kill_at=None, every=25, kill_phase=0):
 def _deliver(bus, hosts, readers, latched, drv):
     for key, m in bus.drain():
         for node in readers.get(key, []):
-            if node == "homeo_sim":
+            if node == "homeo_world":
                 if drv is not None:
                     drv.on_action(m)
                 continue
@@ -186,22 +181,25 @@ def test_an_undisturbed_bus_run_records_every_tick(thesis):
 @pytest.mark.parametrize("field,value", [
     ("params.scenario", "0123"), ("params.human", "person"), ("params.intention_accuracy", False),
     ("params.rate", -1.0), ("params.iterations", "5"), ("rng.human", {"block": 4096, "drawn": 5000}),
-    ("rng.observation", None), ("state.env.world", 10**9), ("state.env.body", [1.0]), ("state.env.tick", 3),
-    ("state.env.cues", {"gesture": "moonwalk"}), ("state.env.human.intention", 99), ("state.metrics.n", -1),
-    ("state.metrics.sum", [float("inf")] * 4), ("state.accuracy.first", "012"), ("state.pending", [1, 0]),
+    ("params.world", "pepper"), ("rng.observation", None), ("state.world.env.world", 10**9),
+    ("state.world.env.body", [1.0]), ("state.world.env.tick", 3), ("state.world.env.cues", {"gesture": "moonwalk"}),
+    ("state.world.env.human.intention", 99), ("state.world.metrics.n", -1),
+    ("state.world.metrics.sum", [float("inf")] * 4), ("state.world.accuracy.first", "012"),
+    ("state.world.pending", [1, 0]), ("state.world", None),
     ("state.position.outcome", [3, {"action": "Fly"}]), ("state.position.missed", 10**6),
     ("state.position.done", "no"), ("ticks", 7)])
 def test_a_corrupt_world_checkpoint_is_refused_whole_with_one_line(thesis, field, value):
-    good, config = world_at_tick_20(thesis, 2)
+    good = world_at_tick_20(thesis, 2)
     bad = copy.deepcopy(good)
     *path, last = field.split(".")
     target = bad
     for p in path:
         target = target[p]
     target[last] = value
-    fresh = SimWorldSide(thesis, 2, intention_accuracy=True)
-    before = (fresh.env.state(), fresh.rec.state(), fresh.hits.state())
+    host = sim_host(thesis, 2, lambda *a: None, 40)
+    fresh, drv = host.world, host.driver
+    before = (fresh.env.state(), fresh.rec.state(), fresh.hits.state(), drv.position())
     with pytest.raises(CheckpointError) as exc:
-        restore_world(fresh, bad, config, "f")
+        host.restore(bad, "f")
     assert "\n" not in str(exc.value) and str(exc.value).startswith("f")
-    assert (fresh.env.state(), fresh.rec.state(), fresh.hits.state()) == before
+    assert (fresh.env.state(), fresh.rec.state(), fresh.hits.state(), drv.position()) == before

@@ -189,23 +189,29 @@ TickHook = Callable[[int, Percept, Recognised, int, Outcome], None]
 
 
 def run_loop(env: Environment, robot: Robot, iterations: int, obs: Observation | None = None,
-             on_tick: TickHook | None = None, t0: int = 0) -> None:
+             on_tick: TickHook | None = None, t0: int = 0, done: Callable[[], bool] | None = None) -> None:
     """Drive ``robot`` in ``env`` for ``iterations`` ticks, then one final (learning) tick.
 
     ``on_tick(t, percept, recognised, action, outcome)`` runs once the robot has taken in tick t's
     outcome (after the step of t+1, or the final one), so ``robot.perception`` then holds the drives
     after tick t: what the metrics of Section 4.1 record. ``t0`` offsets the tick count (the
-    learning schedule of a robot that continues)."""
+    learning schedule of a robot that continues). ``done()``: the environment has no more to give
+    (a scripted user is done); checked after each step, it makes the next tick the final one."""
     if obs is None:
         obs = env.observe()
     end = t0 + iterations
     step, env_step, observe = robot.step, env.step, env.observe
-    a = step(t0, obs, None, iterations == 0)
+    if done is not None and done():
+        end = t0
+    a = step(t0, obs, None, end == t0)
     dec = robot.decision
     for t in range(t0, end):
         p, r = dec.prev, robot.recognised
         out = env_step(a)
-        a_next = step(t + 1, observe(), out, t + 1 == end)
+        last = t + 1 == end or (done is not None and done())
+        a_next = step(t + 1, observe(), out, last)
         if on_tick is not None:
             on_tick(t, p, r, a, out)
+        if last:
+            return
         a = a_next

@@ -6,7 +6,7 @@ robot (DoD 0.25) and a selfish one (DoD 0) meet the same scripted user (Tables 4
 The robot is ``homeo_decision.robot.Robot`` (an oracle recognition reading the intention the
 config's cues name, the perception, the decision with the loaded Q-table) in a
 ``pepper_bridge.environment.PepperEnvironment`` on an in-process stand-in: the objects the graph's
-nodes host, stepped one tick at a time as ``run_loop`` does, until the scripted user is done.
+nodes host, stepped by ``run_loop`` until the scripted user is done.
 The tick count continues after the simulated training (``t0`` = 5000).
 
 CLI (``homeo-pepper-field``)::
@@ -25,7 +25,7 @@ from pathlib import Path
 
 from homeo_decision import qtable_io
 from homeo_decision.agent import DecisionCore
-from homeo_decision.robot import OracleRecognition, Robot
+from homeo_decision.robot import OracleRecognition, Robot, run_loop
 from homeo_decision.scenario import Scenario, load_scenario
 from pepper_bridge.bridge import PepperBridge
 from pepper_bridge.config import LinkSettings, PepperConfig, load_config
@@ -118,24 +118,59 @@ def run_field(script: str | Path | dict, dod: float, seed: int, q_table: str | P
         env = PepperEnvironment(bridge, quiet=quiet, window=window, use_cues=True)
         robot = make_robot(sc, dod, seed, q_table)
         robot.restart(initial_drives(sc, raw.get("robot", {}).get("drives")))
-        obs = env.reset(seed)
-        # run_loop, one tick at a time: the run ends when the scripted user does
-        t = t0
-        a = robot.step(t, obs, None, final=stand.user.done)
-        while not stand.user.done and env.tick < max_interactions:
-            p = robot.percept
-            out = env.step(a)
-            row = dict(env.last_row, m_dom=sc.internal_states[p.m_dom], intention=env.last_row["cue_intention"],
-                       drives=dict(zip(sc.drive_names, [round(x, 1) for x in p.drives])))
-            res.log.append(row)
-            t += 1
-            a = robot.step(t, env.observe(), out, final=stand.user.done or env.tick >= max_interactions)
+
+        def row(t, p, r, a, out):  # the interaction just done, with what the decision chose it for
+            res.log.append(dict(env.last_row, m_dom=sc.internal_states[p.m_dom], intention=env.last_row["cue_intention"],
+                                drives=dict(zip(sc.drive_names, [round(x, 1) for x in p.drives]))))
+
+        # the tick count continues after the simulated training; the run ends when the scripted user does
+        run_loop(env, robot, max_interactions, env.reset(seed), row, t0=t0, done=lambda: stand.user.done)
         res.user_log = list(stand.user.log)
         res.diagnostics = bridge.diagnostics.snapshot()
     finally:
         bridge.stop()
         stand.close()
     return res
+
+
+# -- the field test through the graph (homeo-launch pepper --field) ---------------------------
+def field_result(run: dict, seed: int, default_dod: float | None = None, a=None) -> FieldResult:
+    """A graph run of ``homeo_launch.pepper.run_robot`` as a FieldResult (the charging roles of the
+    run's config and scenario, from its arguments ``a``)."""
+    log = (run["status"].get("extra") or {}).get("log") or []
+    dod = run["dod"] if run["dod"] is not None else default_dod
+    roles = {}
+    if a is not None:
+        sc = load_scenario(a.scenario)
+        roles = charging_roles(load_config(a.config, scenario=sc), sc)
+    return FieldResult(run["label"], dod, seed, log=list(log), user_log=list(run["user_log"]), roles=roles)
+
+
+def cmd_field_graph(a, base: Path, run_robot) -> int:
+    """Both robots through the graph, each with its own stand-in; their tables side by side."""
+    from .launch import PROG
+
+    tables = {}
+    for label, dod in DODS:
+        given = a.q_table or (a.q_dedicated if label == "dedicated" else a.q_selfish)
+        if not given:
+            print(f"{PROG}: training the {label} robot's Q-table ({TRAIN_ITERATIONS} simulated iterations, seed 0, "
+                  f"DoD {dod})", file=sys.stderr)
+            given = str(train_q(Path(a.data_dir) / "field" / f"q_{label}.json", dod))  # kept: the node reads it there
+        tables[label] = given
+    results = []
+    for label, dod in DODS:
+        d = base / label
+        d.mkdir(exist_ok=True)
+        if not a.json and not a.quiet:
+            print(f"{PROG}: {label} robot (DoD {dod}) through the graph", file=sys.stderr)
+        results.append(field_result(run_robot(a, label, dod, tables[label], d), a.seed, a=a))
+    if a.json:
+        print(json.dumps({"seed": a.seed, "robots": [{"summary": r.summary(), "log": r.log} for r in results]},
+                         indent=1))
+    else:
+        print(side_by_side(*results))
+    return 0
 
 
 # -- tables -------------------------------------------------------------------------

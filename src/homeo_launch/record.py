@@ -16,6 +16,7 @@ import os
 from pathlib import Path
 
 from homeo_msgs_py.cli_args import UserError
+from homeo_msgs_py.graph import NODES, WORLD
 
 from .tap import STRING, Tapped, pub_qos_of
 
@@ -97,7 +98,7 @@ class WriterBag:
     the spools. The graph never waits for a recorder: there is none on the wire."""
 
     at_writers = True
-    OUTSIDE = ("human_input",)  # written by no node of the graph: taken by the tap
+    OUTSIDE = NODES[WORLD].external  # written by no node of the graph: taken by the tap
 
     def __init__(self, path: str | Path, info: dict, topics: list[Tapped]):
         self.path, self.info, self.topics = Path(path), info, topics

@@ -110,7 +110,8 @@ def _keep_log(g: Graph, name: str, n: int) -> None:
         pass
 
 
-def wait_until_up(graph: Graph, mon, sup: Supervisor, nodes, endpoints, bound: float) -> None:
+def wait_until_up(graph: Graph, mon, check, nodes, endpoints, bound: float) -> None:
     """``monitor.wait_until_up`` with supervision: the run may start (the world node decides) while
-    the launcher is still discovering, and a node that dies then is restarted as later."""
-    monitor.wait_until_up(graph, mon, nodes, endpoints, bound, check=sup.check)
+    the launcher is still discovering, and a node that dies then is restarted as later (``check``:
+    ``Supervisor.check``, with whatever else the launcher watches)."""
+    monitor.wait_until_up(graph, mon, nodes, endpoints, bound, check=check)

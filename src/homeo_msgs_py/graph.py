@@ -47,7 +47,8 @@ class NodeDesc:
     publishes: tuple  # keys of TOPICS
     inputs: tuple  # of Input
     services: tuple = ()  # relative to the node (~/...)
-    joins: bool = True  # its inputs join into ticks (the world nodes pace the ticks themselves)
+    joins: bool = True  # its inputs join into ticks (the world node paces the ticks itself)
+    external: tuple = ()  # keys of TOPICS it may read from outside the graph (a person), when its world asks
 
     def reads(self, learning: bool) -> tuple:
         return tuple(i for i in self.inputs if learning or not i.learning_only)
@@ -65,6 +66,9 @@ TOPICS: dict[str, Topic] = {
     "action": Topic("homeo/action", "homeo/action", EVENT),
     "outcome": Topic("homeo/outcome", "homeo/outcome", EVENT),
     "run_status": Topic("homeo/run_status", "homeo/run_status", STATE),
+    # what a robot asks of the devices around it (a player to play, a light to switch): for whoever
+    # drives them; no node of the graph reads it
+    "device": Topic("homeo/device", "homeo/device", EVENT),
     # a person playing the human (``--human person``): read by the simulation in that mode only
     "human_input": Topic("homeo/human_input", "homeo/human_input", EVENT),
 }
@@ -72,14 +76,12 @@ TOPICS: dict[str, Topic] = {
 # input is typed by hand and is not
 SIGNED = frozenset(k for k in TOPICS if k != "human_input")
 DIAGNOSTICS = "/diagnostics"  # absolute: every node reports to the one aggregator topic
-DEVICE = "homeo/device"  # std_msgs/String plain JSON from the Pepper bridge (Play/Stop/... commands)
 
-_WORLD_PUBLISHES = ("world", "observation", "outcome", "run_status")
+WORLD = "homeo_world"  # the one world node: any environment (simulation, Pepper, ...) behind the boundary
 NODES: dict[str, NodeDesc] = {
-    "homeo_sim": NodeDesc("homeo_sim", "homeo_sim.node", "world", _WORLD_PUBLISHES, (Input("action"),),
-                          ("~/reset",), joins=False),
-    "pepper_bridge": NodeDesc("pepper_bridge", "pepper_bridge.node", "world", _WORLD_PUBLISHES, (Input("action"),),
-                              joins=False),
+    WORLD: NodeDesc(WORLD, "homeo_decision.world_node", "world",
+                    ("world", "observation", "outcome", "run_status", "device"), (Input("action"),), ("~/reset",),
+                    joins=False, external=("human_input",)),
     "homeo_intention": NodeDesc("homeo_intention", "homeo_intention.node", "intention", ("intention",),
                                 (Input("observation"), Input("outcome", -1, learning_only=True)),
                                 ("~/save_model", "~/load_model")),
@@ -91,10 +93,7 @@ NODES: dict[str, NodeDesc] = {
 LAUNCHER = "homeo_launch"  # the launcher's own node (its monitor)
 RECORDER = "homeo_record"  # the launcher's tap (a bag, a live view)
 ROBOT_NODES = ("homeo_intention", "homeo_drives", "homeo_decision")
-GRAPHS: dict[str, tuple] = {
-    "sim": ("homeo_sim",) + ROBOT_NODES,
-    "pepper": ("pepper_bridge",) + ROBOT_NODES,
-}
+GRAPH = (WORLD,) + ROBOT_NODES  # every robot, simulated or real, runs this graph
 
 
 def topic_name(key: str) -> str:
@@ -115,10 +114,10 @@ def schema_of(key: str) -> str:
         raise KeyError(f"{key} is not a homeo topic; known: {', '.join(TOPICS)}") from None
 
 
-def endpoints(graph: str, learning: bool) -> dict[str, tuple[int, int]]:
-    """(writers, readers) of every joined topic in ``graph`` (the launcher waits for all of them)."""
+def endpoints(learning: bool) -> dict[str, tuple[int, int]]:
+    """(writers, readers) of every topic the graph's nodes publish or join (the launcher waits for all)."""
     out: dict[str, list] = {}
-    for n in GRAPHS[graph]:
+    for n in GRAPH:
         node = NODES[n]
         for t in node.publishes:
             if t != "run_status":  # read by the launcher, not by a node
@@ -128,15 +127,15 @@ def endpoints(graph: str, learning: bool) -> dict[str, tuple[int, int]]:
     return {t: (w, r) for t, (w, r) in out.items()}
 
 
-def readers(graph: str, topic: str, learning: bool) -> int:
-    """How many nodes of ``graph`` read ``topic`` (a world node's start gate waits for them)."""
-    return endpoints(graph, learning).get(topic, (0, 0))[1]
+def readers(topic: str, learning: bool) -> int:
+    """How many nodes of the graph read ``topic`` (the world node's start gate waits for them)."""
+    return endpoints(learning).get(topic, (0, 0))[1]
 
 
 def min_readers(topic: str) -> int:
-    """The fewest nodes reading ``topic`` in any graph and mode: a robot node, which does not know
-    which graph it is in, waits for that many readers (and the launcher's tap) before it publishes."""
-    return min(readers(g, topic, learning) for g in GRAPHS for learning in (False, True))
+    """The fewest nodes reading ``topic`` in either mode: a robot node, which does not know whether
+    the intention node learns, waits for that many readers (and the launcher's tap) before it publishes."""
+    return min(readers(topic, learning) for learning in (False, True))
 
 
 def own_endpoints(infos, nodes, namespace: str) -> int:

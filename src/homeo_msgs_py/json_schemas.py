@@ -56,6 +56,7 @@ def fields(name: str, voc: Vocabulary) -> dict:
                           "proposal": _enum(voc, "actions", True), "clarified_intention": _enum(voc, "intentions", True),
                           "body": _map(voc, "drives", drive, extra=True),
                           "truth": _obj({"intention": _enum(voc, "intentions"), "expressed": BOOL, "satisfied": BOOL})},
+        "homeo/device": {"device": STR, "command": STR, "action": _enum(voc, "actions", True)},
         "homeo/run_status": {"iterations": INT, "done": BOOL, "missed": INT, "state": STR,
                              "metrics": OBJ, "extra": OBJ},
         "homeo/human_input": {"intention": _enum(voc, "intentions", True), "feedback": {"enum": ["praise", "scold", None]},

@@ -227,6 +227,22 @@ class HomeoNode(Node):
         where[0] = sub.topic_name  # reported fully resolved, namespace included
         return sub
 
+    def subscribe_text(self, key: str, handler: Callable[[str], None]):
+        """``handler`` gets the text of each message of topic ``key``, a topic from outside the graph
+        (a person's input: no envelope, no signature); a ``Rejected`` it raises drops the message
+        with its reason, counted and reported as for the graph's own topics."""
+        where = [TOPICS[key].name]
+
+        def cb(msg: String) -> None:
+            try:
+                handler(msg.data)
+            except Rejected as exc:
+                self.reject(where[0], str(exc))
+
+        sub = self.create_subscription(String, where[0], cb, sub_qos(key), event_callbacks=quiet_sub_events())
+        where[0] = sub.topic_name
+        return sub
+
     # -- the start gate -------------------------------------------------------------------
     def gate_missing(self, pubs: dict, want: Callable[[str], int], inputs) -> list[str]:
         """What a world node still waits for before tick 0: for each publisher (key -> GatedPublisher)

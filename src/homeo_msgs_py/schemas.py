@@ -284,7 +284,13 @@ SCHEMAS: dict[str, dict[str, tuple[Check, bool]]] = {
         "feedback": (_praise_scold, False),
         "proposal": (_one_of("actions", nullable=True), False),
     },
-    # simulation -> launcher: progress and, at the end, the run's metrics
+    # world -> the devices around the robot: a command its config maps an action to (play, switch on)
+    "homeo/device": {
+        "device": (_str, True),
+        "command": (_str, True),
+        "action": (_one_of("actions", nullable=True), True),  # the action being performed
+    },
+    # world -> launcher: progress and, at the end, the run's metrics
     "homeo/run_status": {
         "iterations": (_int(0, 2**62), True),
         "done": (_bool, True),

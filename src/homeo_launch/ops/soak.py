@@ -34,7 +34,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from .procfs import stat_fields
+from ..procfs import stat_fields
 
 SAMPLES = 40  # memory samples over a run
 
@@ -205,59 +205,37 @@ def _summary(mem, cpu, n) -> dict:
 
 
 def soak_bus(ticks: int, seed: int = 0, progress=None) -> dict:
-    """The graph's own code without DDS: the world node's driver and side and the three robot
-    nodes' hosts in this process, every message encoded, decoded and joined as the nodes do, passed
-    in order (tests/test_graph_stages.py's bus, unshuffled). Tells the code's cost apart from
-    rclpy's and the machine's."""
-    from homeo_decision.agent import DecisionCore
-    from homeo_decision.codec import vocabulary
-    from homeo_decision.hosts import DecisionHost, PerceptionHost
+    """The graph's own code without DDS: the world host and the three robot nodes' hosts in this
+    process (``homeo_launch.bus``, unshuffled), every message encoded, decoded and joined as the
+    nodes do. Tells the code's cost apart from rclpy's and the machine's."""
     from homeo_decision.scenario import load_scenario
-    from homeo_intention.recognition import RecognitionHost
-    from homeo_msgs_py.graph import BAYES, GRAPHS, NODES, TOPICS
-    from homeo_msgs_py.lockstep import DONE, LockstepDriver
-    from homeo_msgs_py.schemas import decode, encode
-    from homeo_sim.world_side import SimWorldSide
+    from homeo_msgs_py.graph import BAYES
+    from homeo_sim.world_backend import SimWorld
+
+    from ..bus import BusGraph
 
     sc = load_scenario()
-    voc = vocabulary(sc)
-    queue: list = []
-    send = lambda key, tick, fields, run=0: queue.append((key, encode(TOPICS[key].schema, tick, fields, run=run)))  # noqa: E731
-    side = SimWorldSide(sc, seed, intention_accuracy=True)
-    driver = LockstepDriver(side, send, iterations=ticks)
-    hosts = {"homeo_intention": RecognitionHost(sc, BAYES), "homeo_drives": PerceptionHost(sc),
-             "homeo_decision": DecisionHost(sc, DecisionCore(sc, seed))}
-    readers: dict = {}
-    for n in GRAPHS["sim"]:
-        for i in NODES[n].reads(True):
-            readers.setdefault(i.topic, []).append(n)
+    world = SimWorld(sc, {"seed": seed, "intention_learns": True})
+    g = BusGraph(world, ticks, mode=BAYES, seed=seed)
     every, mem_every = max(1, ticks // 100), max(1, ticks // SAMPLES)
     with Reference() as ref:
         times, cpu, mem = [(0, time.perf_counter())], [(0, time.process_time())], [(0, rss_mb())]
         ref.sample(0)
-        driver.begin()
-        while driver.state != DONE:
-            batch, queue[:] = list(queue), []
-            for key, text in batch:
-                m = decode(text, voc)
-                for n in readers.get(key, []):
-                    if n == "homeo_sim":
-                        driver.on_action(m)
-                        continue
-                    for k, fields in hosts[n].stage.put(key, m):
-                        send(NODES[n].publishes[0], k, fields)
-            k = driver.tick
+
+        def on_round(k):
             if k >= times[-1][0] + every:
                 times.append((k, time.perf_counter()))
                 cpu.append((k, time.process_time()))
                 ref.sample(k)
-                side.status(False)  # the metrics, as the node publishes them
+                world.status(False)  # the metrics, as the node publishes them
                 if progress is not None:
                     progress(k)
             if k >= mem[-1][0] + mem_every:
                 mem.append((k, rss_mb()))
+
+        g.run(on_round)
     name = "graph code, no DDS (in-process)"
-    return {"ticks": ticks, "HSR": side.status(True)["metrics"]["HSR"],
+    return {"ticks": ticks, "HSR": world.status(True)["metrics"]["HSR"],
             "wall_s_per_tick": list(per_tick_ends(times, ticks)),
             "processes": {name: _summary(mem, cpu, ticks)}, "reference": ref.summary(ticks),
             "samples": {"time": times, "cpu": {name: cpu}, "reference": ref.samples}}
@@ -365,7 +343,7 @@ def soak_graph(ticks: int, seed: int = 0, progress=None, fresh: int = 0, fresh_d
     """``fresh``: also run a fresh graph of that many ticks beside the long run near its start and
     again near its end (on ROS domain ``fresh_domain``), and compare the cost per tick over the same
     minutes (``side_by_side``): the long run's growth with the machine's drift taken out."""
-    from .sim import SimOptions, run_graph
+    from ..launch import run_graph, sim_options
 
     times: list = []
     mem: dict = {}
@@ -385,7 +363,7 @@ def soak_graph(ticks: int, seed: int = 0, progress=None, fresh: int = 0, fresh_d
     fresh_at = {"early": max(100, ticks // 100), "late": max(ticks // 2, ticks - int(1.3 * fresh) - ticks // 50)}
     fresh_runs: dict = {}
 
-    def on_progress(tick, fields):
+    def on_status(tick, fields):
         now = time.perf_counter()
         if fresh and tmp_dir:
             for name, at in fresh_at.items():
@@ -412,9 +390,9 @@ def soak_graph(ticks: int, seed: int = 0, progress=None, fresh: int = 0, fresh_d
     tmp_dir: list = []
     with Reference() as ref, tempfile.TemporaryDirectory(prefix="homeo-soak-") as tmp:
         tmp_dir.append(tmp)
-        o = SimOptions(iterations=ticks, seed=seed, data_dir=tmp, checkpoint_dir=os.path.join(tmp, "checkpoints"))
+        o = sim_options(ticks, seed=seed, data_dir=tmp, checkpoint_dir=os.path.join(tmp, "checkpoints"))
         try:
-            status = run_graph(o, quiet=True, on_progress=on_progress, on_start=on_start)
+            status = run_graph(o, quiet=True, on_status=on_status, on_start=on_start)
             fresh_samples = {name: f.result() for name, f in fresh_runs.items()}
         finally:
             for f in fresh_runs.values():

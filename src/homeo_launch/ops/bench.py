@@ -18,9 +18,10 @@ import time
 
 from homeo_msgs_py.graph import ORACLE
 
-from .sim import GraphError, SimOptions, run_graph
-from .processes import Graph, NodeSpec, graph_env
-from .tap import Tap
+from ..launch import GraphOptions, run_graph, sim_options
+from ..monitor import GraphError
+from ..processes import Graph, NodeSpec, graph_env
+from ..tap import Tap
 
 HOPS = 6  # publish-receive hops per tick in the graph (see above)
 CRITICAL_HOPS = 4
@@ -28,7 +29,7 @@ CRITICAL_HOPS = 4
 
 def floor_s_per_tick(iterations: int, hops: int = HOPS, bound_s: float = 120.0) -> float:
     # each process declares node name homeo_floor: renamed so that its parameters file applies
-    specs = [NodeSpec(f"homeo_floor_{i}", "homeo_launch.floor_chain",
+    specs = [NodeSpec(f"homeo_floor_{i}", "homeo_launch.ops.floor_chain",
                       {"index": i, "hops": hops, "iterations": iterations},
                       args=["--ros-args", "-r", f"__node:=homeo_floor_{i}"]) for i in range(hops)]
     graph = Graph(specs, graph_env(), auth=False)  # the floor: raw rclpy, nothing signed
@@ -52,7 +53,7 @@ def floor_s_per_tick(iterations: int, hops: int = HOPS, bound_s: float = 120.0) 
         graph.close()
 
 
-def timed_run(o: SimOptions, sinks=()) -> dict:
+def timed_run(o: GraphOptions, sinks=()) -> dict:
     """One graph run: wall seconds per tick (first tick to done), and CPU seconds per tick of the whole
     graph (every node process and the launcher with its tap) and of the launcher alone, counted between
     the first status of the running run and the final one, so start-up and shut-down are left out.
@@ -65,11 +66,11 @@ def timed_run(o: SimOptions, sinks=()) -> dict:
     def on_start(graph):
         pids.update(graph.pids(), launcher=os.getpid())
 
-    def on_progress(tick, fields):
+    def on_status(tick, fields):
         if fields.get("state") in ("running", "finishing", "done") and (not marks or fields.get("done")):
             marks.append((tick, {n: cpu_s(p) for n, p in pids.items()}))
 
-    st = run_graph(o, quiet=True, sinks=sinks, on_start=on_start, on_progress=on_progress)
+    st = run_graph(o, quiet=True, sinks=sinks, on_start=on_start, on_status=on_status)
     out = {"s_per_tick": st["elapsed_s"] / o.iterations, "status": st}
     if len(marks) == 2 and marks[1][0] > marks[0][0]:
         (t0, c0), (t1, c1) = marks
@@ -88,13 +89,13 @@ def recorded_run(iterations: int, record_from: str = "writers") -> dict:
 
     from homeo_decision.scenario import load_scenario
 
-    from .record import new_bag, run_info
-    from .tap import tapped_topics
+    from ..record import new_bag, run_info
+    from ..tap import tapped_topics
 
     with tempfile.TemporaryDirectory(prefix="homeo-bench-bag-") as tmp:
         sink = new_bag(Path(tmp) / "bag", run_info("sim", iterations, 0, load_scenario(), {}), tapped_topics(),
                        record_from)
-        o = SimOptions(iterations=iterations, data_dir=str(Path(tmp) / "data"))
+        o = sim_options(iterations, data_dir=str(Path(tmp) / "data"))
         try:
             out = timed_run(o, sinks=[sink])
         finally:
@@ -130,17 +131,17 @@ def cmd_bench(args) -> int:
     graph, oracle, floor, crit, rss, missed = [], [], [], [], [], 0
     recorded, unsigned, plain_runs, rec_runs = [], [], [], []
     for r in range(args.rounds):
-        run = timed_run(SimOptions(iterations=args.iterations))
+        run = timed_run(sim_options(args.iterations))
         st = run["status"]
         plain_runs.append(run)
         graph.append(run["s_per_tick"])
         if getattr(args, "compare_auth", False):
-            unsigned.append(run_graph(SimOptions(iterations=args.iterations, auth=False),
+            unsigned.append(run_graph(sim_options(args.iterations, auth=False),
                                       quiet=True)["elapsed_s"] / args.iterations)
         if getattr(args, "record", False):
             rec_runs.append(recorded_run(args.iterations, getattr(args, "record_from", "writers")))
             recorded.append(rec_runs[-1]["s_per_tick"])
-        oracle.append(run_graph(SimOptions(iterations=args.iterations, intention=ORACLE),
+        oracle.append(run_graph(sim_options(args.iterations, intention=ORACLE),
                                 quiet=True)["elapsed_s"] / args.iterations)
         rss.append(st["rss_mb"])
         missed += st["missed"]
@@ -221,3 +222,18 @@ def cmd_bench(args) -> int:
                       f"{rec['launcher_cpu_s_per_tick_recording'] * 1e3:.3f} ms (the tap's threads run at nice "
                       f"{Tap.NICE}, below the nodes)")
     return 0
+
+
+def add_parser(sub) -> None:
+    from homeo_msgs_py.cli_args import int_at_least
+
+    b = sub.add_parser("bench", help="seconds per tick of the graph against a raw rclpy chain (the floor)")
+    b.add_argument("--iterations", type=int_at_least(10), default=1000, help="ticks of each (default 1000)")
+    b.add_argument("--rounds", type=int_at_least(1), default=3, help="alternating graph/floor pairs (default 3)")
+    b.add_argument("--record", action="store_true",
+                   help="also time the graph recording a bag, and print the ratio with / without recording")
+    b.add_argument("--record-from", choices=("writers", "tap"), default="writers",
+                   help="how the timed recording records (as sim --record-from; default writers)")
+    b.add_argument("--compare-auth", action="store_true",
+                   help="also time the graph without authentication (--no-auth), and print the ratio")
+    b.add_argument("--json", action="store_true")

@@ -19,8 +19,8 @@ from homeo_msgs_py import data_dir
 from homeo_msgs_py.cli_args import UserError
 from homeo_msgs_py.schemas import one_line
 
-from .record import MANIFEST, MANIFEST_SCHEMA, MANIFEST_VERSION, SPOOL_PREFIX, merge_spools, proc_start
-from .tap import DIAG_KEY, DIAGNOSTIC_ARRAY, STRING, Tapped
+from ..record import MANIFEST, MANIFEST_SCHEMA, MANIFEST_VERSION, SPOOL_PREFIX, merge_spools, proc_start
+from ..tap import DIAG_KEY, DIAGNOSTIC_ARRAY, STRING, Tapped
 
 KINDS = ("state", "event", "diagnostics")
 MAX_MANIFEST = 16 << 20  # bytes: the run's settings and its scenario's text, with room to spare
