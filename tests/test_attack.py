@@ -145,7 +145,7 @@ def test_a_forged_action_is_dropped_with_auth_and_executed_without(auth):
                 executed = probe.spin_until(lambda: outcomes[-1]["tick"] == tick, 5.0)
                 if auth:
                     assert not executed  # the forged action was dropped: the tick still waits
-                    assert probe.spin_until(lambda: "unsigned" in diag.get("homeo_sim: inputs", {}).get(
+                    assert probe.spin_until(lambda: "unsigned" in diag.get("homeo_world: inputs", {}).get(
                         "values", {}).get("last reason /homeo/action", ""), 5.0), diag
                 else:
                     assert executed and outcomes[-1]["action"] == forged["action"]  # steered, as documented

@@ -281,7 +281,7 @@ def test_the_world_node_killed_mid_run_goes_on_with_the_same_run_and_counts_the_
     assert lost <= 50 + 5  # at most about one checkpoint interval
     final = json.loads(path.read_text())  # the restarted process's, at the end of the same run
     assert final["session"] == last["session"] and final["state"]["position"]["done"]
-    assert final["state"]["position"]["missed"] >= lost and final["state"]["metrics"]["n"] <= n - lost
+    assert final["state"]["position"]["missed"] >= lost and final["state"]["world"]["metrics"]["n"] <= n - lost
     # the trace holds each tick once, in order: the lost ticks as ticks without an action
     ticks = [json.loads(line)["tick"] for line in (tmp_path / "trace.jsonl").read_text().splitlines()]
     assert ticks == list(range(n))

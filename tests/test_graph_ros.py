@@ -192,7 +192,7 @@ def test_garbage_on_every_input_topic_is_rejected_and_reported_while_the_run_goe
                 return True
 
             assert probe.spin_until(reported, 20.0), json.dumps(diag, indent=1)
-            sim = diag["homeo_sim: inputs"]["values"]
+            sim = diag["homeo_world: inputs"]["values"]
             assert "stale tick 0" in sim["last reason /homeo/action"]
             for n, topics in (("homeo_world", ["/homeo/action"]), ("homeo_drives", ["/homeo/world", "/homeo/outcome"])):
                 recent = " ".join(diag[f"{n}: inputs"]["values"][f"recent reasons {t}"] for t in topics)
@@ -276,7 +276,7 @@ def test_a_dead_node_is_named_and_the_rest_are_stopped():
         os.kill(victim, signal.SIGKILL)
         out, err = la.communicate(timeout=20)
         assert la.returncode == 1
-        assert "node homeo_sim exited with code -9" in err
+        assert "node homeo_world exited with code -9" in err
         assert not [k for k in kids if _alive(k)]
     finally:
         if la.poll() is None:

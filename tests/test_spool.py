@@ -256,7 +256,8 @@ def test_ctrl_c_keeps_every_message_sent_until_then_in_the_bag(tmp_path):
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
             proc.communicate()
-    assert proc.returncode == 0 and json.loads(out)["iterations"] == 0, err[-2000:]
+    # an unbounded run's summary counts the ticks that ran (at least the 50 actions waited for)
+    assert proc.returncode == 0 and json.loads(out)["iterations"] >= 50, err[-2000:]
     assert not list(tmp_path.glob(".homeo-record-*"))
     (f,) = bag.glob("*.mcap")
     with open(f, "rb") as fh:

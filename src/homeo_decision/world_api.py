@@ -123,8 +123,9 @@ class WorldBackend:
         return None
 
     def poll(self) -> list[tuple[str, str]]:
-        """Called often on the node's thread: notices to log, ``(level, text)`` with level info or
-        warning; any notice also sends the node's diagnostics at once."""
+        """Called often on the node's thread: notices to log, ``(level, text)`` with level info,
+        warning or burst (a warning that may come many times a second: logged once a second); any
+        notice also sends the node's diagnostics at once."""
         return []
 
     def diagnostics(self) -> list[dict]:
@@ -158,9 +159,11 @@ class WorldBackend:
         if state:
             raise ValueError("this world keeps no state")
 
-    def rejoin(self, tick: int, lost: int) -> dict | None:
+    def rejoin(self, tick: int, lost: int, step_lost: Callable[[], dict]) -> dict | None:
         """The node was down and goes on at ``tick``; ``lost`` ticks since its checkpoint were never
-        seen. The outcome fields of ``tick - 1`` to send first, or None: the checkpoint's."""
+        seen. The outcome fields of ``tick - 1`` to send first, or None: the checkpoint's. A world
+        whose time went on meanwhile steps the lost ticks with ``step_lost()`` (one tick without an
+        action, traced; its outcome fields)."""
         return None
 
 

@@ -50,10 +50,10 @@ class WorldHost:
         return self.world.observe(final)
 
     def step(self, action_fields: dict | None) -> dict:
-        return self._traced(action_fields, self.world.step(action_fields))
+        return self._traced(self.driver.tick, action_fields, self.world.step(action_fields))
 
     def step_failed(self, action_fields: dict | None, reason: str) -> dict:
-        return self._traced(action_fields, self.world.step_failed(action_fields, reason))
+        return self._traced(self.driver.tick, action_fields, self.world.step_failed(action_fields, reason))
 
     def check_action(self, fields: dict, tick: int) -> None:
         self.world.check_action(fields, tick)
@@ -64,10 +64,10 @@ class WorldHost:
     def status(self, done: bool) -> dict:
         return self.world.status(done)
 
-    def _traced(self, action_fields: dict | None, out: dict) -> dict:
+    def _traced(self, tick: int, action_fields: dict | None, out: dict) -> dict:
         if self.trace is not None:
             truth = out.get("truth")
-            self.trace.write(json.dumps({"tick": self.driver.tick,
+            self.trace.write(json.dumps({"tick": tick,
                                          "intention": truth["intention"] if truth and truth["expressed"] else None,
                                          "action": action_fields.get("action") if action_fields else None,
                                          "feedback": out["feedback"], "proposal": out["proposal"]}) + "\n")
@@ -153,6 +153,7 @@ class WorldHost:
     def go_on(self, run: int, tick: int, pos: dict, lost: int) -> None:
         """After a restart: the driver rejoins ``run`` at ``tick``; ``lost`` ticks since the position
         were never seen (counted as missed)."""
-        fields = self.world.rejoin(tick, lost)
+        lost_ticks = iter(range(tick - lost, tick))  # stepped by a world whose time went on: traced as they go
+        fields = self.world.rejoin(tick, lost, lambda: self._traced(next(lost_ticks), None, self.world.step(None)))
         outcome = (tick - 1, fields) if fields is not None else pos["outcome"]
         self.driver.rejoin(run, tick, pos["missed"] + lost, pos["elapsed"], outcome)

@@ -134,11 +134,14 @@ class WorldNode(durable.DurableWorld, ScenarioNode):
     # -- the timer: the world's notices and devices, the start gate, the driver, the status --------
     def _poll(self) -> None:
         notices = self.world.poll()
-        for level, text in notices:  # one call site per severity: rclpy's logger insists
-            if level == "warning":
-                self.get_logger().warning(text, throttle_duration_sec=1.0 if text.startswith("rejected") else 0.0)
+        log = self.get_logger()
+        for level, text in notices:  # one call site per severity and filter: rclpy's logger insists
+            if level == "burst":
+                log.warning(text, throttle_duration_sec=1.0)
+            elif level == "warning":
+                log.warning(text)
             else:
-                self.get_logger().info(text)
+                log.info(text)
         if notices:
             self.publish_diagnostics()  # connection changes and rejections go out at once
         for d in self.world.devices():

@@ -140,13 +140,13 @@ class SimWorld(WorldBackend):
         self.rec, self.hits = rec, hits
         self._last = None if pending is None else Outcome(None, 0, None, None, None, int(pending[0]), pending[1])
 
-    def rejoin(self, tick: int, lost: int) -> dict | None:
+    def rejoin(self, tick: int, lost: int, step_lost) -> dict | None:
         """Time passed while the node was down and nobody acted: ``lost`` ticks stepped without an
         action, none of them recorded (no robot drives came back)."""
         if not lost:
             return None
         fields = {}
         for _ in range(lost):
-            fields = self.step(None)
+            fields = step_lost()
         self._last = None
         return fields

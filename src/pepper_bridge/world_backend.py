@@ -197,7 +197,7 @@ class PepperWorld(WorldBackend):
                 else:
                     out.append(("warning", f"robot {e.value['state']}: {e.value['reason']}"))
             else:
-                out.append(("warning", f"rejected a value from the robot: {e.value['source']} = {e.value['value']}: "
+                out.append(("burst", f"rejected a value from the robot: {e.value['source']} = {e.value['value']}: "
                                        f"{e.value['reason']}"))
         return out
 
@@ -256,7 +256,7 @@ class PepperWorld(WorldBackend):
         self.log = list(rows)
         self.env.tick = done
 
-    def rejoin(self, tick: int, lost: int) -> dict | None:
+    def rejoin(self, tick: int, lost: int, step_lost) -> dict | None:
         self.env.tick = tick  # the interactions go on being numbered from here
         if not lost:
             return None
