@@ -185,6 +185,7 @@ def test_an_undisturbed_bus_run_records_every_tick(thesis):
 
 @pytest.mark.parametrize("field,value", [
     ("params.scenario", "0123"), ("params.human", "person"), ("params.intention_accuracy", False),
+    ("params.world_codes", "0123456789abcdef"), ("params.world_codes", None),
     ("params.rate", -1.0), ("params.iterations", "5"), ("rng.human", {"block": 4096, "drawn": 5000}),
     ("rng.observation", None), ("state.env.world", 10**9), ("state.env.body", [1.0]), ("state.env.tick", 3),
     ("state.env.cues", {"gesture": "moonwalk"}), ("state.env.human.intention", 99), ("state.metrics.n", -1),
@@ -205,3 +206,18 @@ def test_a_corrupt_world_checkpoint_is_refused_whole_with_one_line(thesis, field
         restore_world(fresh, bad, config, "f")
     assert "\n" not in str(exc.value) and str(exc.value).startswith("f")
     assert (fresh.env.state(), fresh.rec.state(), fresh.hits.state()) == before
+
+
+def test_a_world_checkpoint_written_before_the_codes_held_the_relation_is_refused(thesis):
+    """Its ``state.env.world`` counts presence, not relation (issue 22): read now it would be another world."""
+    good, config = world_at_tick_20(thesis, 2)
+    assert good["params"]["world_codes"] == config["world_codes"]
+    old = copy.deepcopy(good)
+    del old["params"]["world_codes"]
+    fresh = SimWorldSide(thesis, 2, intention_accuracy=True)
+    with pytest.raises(CheckpointError, match="written before world codes held the human's relation") as exc:
+        restore_world(fresh, old, config, "f")
+    assert "\n" not in str(exc.value)
+    restore_world(fresh, copy.deepcopy(good), config, "f")  # the current one still loads
+    assert fresh.env.world.code == good["state"]["env"]["world"]
+

@@ -3,7 +3,8 @@ process died, in ``homeo_decision.checkpoint``'s envelope (node ``homeo_sim``, w
 by the same ``Checkpointer``).
 
     params  the run's configuration: seed, iterations, rate, action_timeout, intention_accuracy,
-            human, the scenario's fingerprint, and how many bytes of the trace file belong to it
+            human, the scenario's fingerprint, how its world codes are numbered (``world_codes``: a
+            checkpoint of another numbering is refused), and how many bytes of the trace file belong to it
     rng     the human's two streams ("human", "observation"): a restart continues them exactly
     state   env (world code, body, human, the cues of the current observation), metrics (the
             recorder's running sums), accuracy (the recognition hits kept), pending (the truth of
@@ -16,7 +17,8 @@ it changes anything, and a checkpoint of another scenario, human or recognition 
 
 from __future__ import annotations
 
-from homeo_decision.checkpoint import CheckpointError, check_int as _int, check_number as _num, envelope
+from homeo_decision.checkpoint import CheckpointError, check_codes, check_int as _int, check_number as _num, codes_print
+from homeo_decision.checkpoint import envelope
 from homeo_decision.checkpoint import check_world_position as check_position
 from homeo_decision.checkpoint import scenario_print
 from homeo_decision.codec import vocabulary
@@ -29,7 +31,7 @@ def run_config(sc, *, seed: int, iterations: int, rate: float, action_timeout: f
                human: str, trace_bytes: int | None = None) -> dict:
     return {"seed": int(seed), "iterations": int(iterations), "rate": float(rate),
             "action_timeout": float(action_timeout), "intention_accuracy": bool(intention_accuracy),
-            "human": human, "scenario": scenario_print(sc), "trace_bytes": trace_bytes}
+            "human": human, "scenario": scenario_print(sc), "world_codes": codes_print(sc), "trace_bytes": trace_bytes}
 
 
 def world_checkpoint(side, position: dict, config: dict, session: str = "") -> dict:
@@ -43,6 +45,7 @@ def world_checkpoint(side, position: dict, config: dict, session: str = "") -> d
 
 def check_config(p: dict, ours: dict, where: str) -> dict:
     """The checkpoint's run configuration, checked; refused when it is of another kind of run."""
+    check_codes(p.get("world_codes"), ours["world_codes"], where)
     try:
         for key in CONFIG_CHECKED:
             if p.get(key) != ours[key]:
