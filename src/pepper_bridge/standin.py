@@ -555,17 +555,9 @@ class StandinRobot:
 
         ALPeoplePerception = extractor("ALPeoplePerception")
 
-        class ALEngagementZones:
-            """An extractor, the zones' limits and computeEngagementZone(x, y, z) (a point in FRAME_ROBOT ->
-            its zone) (http://doc.aldebaran.com/2-4/naoqi/peopleperception/alengagementzones-api.html)."""
-
-            @qi.bind(qi.Void, [qi.String])
-            def subscribe(self, name):
-                robot.record("ALEngagementZones", "subscribe", name)
-
-            @qi.bind(qi.Void, [qi.String])
-            def unsubscribe(self, name):
-                robot.record("ALEngagementZones", "unsubscribe", name)
+        class ALEngagementZones(extractor("ALEngagementZones")):  # qi serves the extractor's methods too
+            """The zones' limits and computeEngagementZone(x, y, z) (a point in FRAME_ROBOT -> its zone)
+            (http://doc.aldebaran.com/2-4/naoqi/peopleperception/alengagementzones-api.html)."""
 
             @qi.bind(qi.Float, [])
             def getFirstLimitDistance(self):
