@@ -12,8 +12,6 @@ import sys
 import time
 
 import pytest
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
 
 from homeo_decision import checkpoint, jsonfile
 from homeo_decision.agent import DecisionCore
@@ -311,24 +309,3 @@ def test_a_drives_checkpoint_records_how_its_world_codes_are_numbered(thesis):
     fresh = PerceptionHost(thesis)
     checkpoint.restore_drives(fresh, ck)
     assert fresh.perception.prev_code == host.perception.prev_code
-
-
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(st.one_of(st.just(None), st.text(max_size=20), st.integers(), st.lists(st.integers(), max_size=2)))
-def test_a_drives_checkpoint_of_other_world_codes_is_refused_in_one_line_and_changes_nothing(thesis, saved):
-    """A checkpoint written before the world code held the relation (no ``world_codes``) or of another
-    numbering: its prev_code would name another world, so it is refused before anything changes."""
-    from homeo_decision.hosts import PerceptionHost
-
-    host = PerceptionHost(thesis)
-    ck = json.loads(json.dumps(checkpoint.drives_checkpoint(host.perception, 0, 0, _drives_answer(thesis, host))))
-    if saved is None:
-        del ck["state"]["world_codes"]  # as every checkpoint written before issue 22
-    else:
-        ck["state"]["world_codes"] = saved
-    fresh = PerceptionHost(thesis)
-    before = checkpoint.drives_learned(fresh.perception)
-    with pytest.raises(CheckpointError, match="world codes this program would misread") as e:
-        checkpoint.restore_drives(fresh, ck, "f")
-    assert "\n" not in str(e.value) and str(e.value).startswith("f: ")
-    assert checkpoint.drives_learned(fresh.perception) == before

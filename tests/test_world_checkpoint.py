@@ -221,3 +221,17 @@ def test_a_world_checkpoint_written_before_the_codes_held_the_relation_is_refuse
     restore_world(fresh, copy.deepcopy(good), config, "f")  # the current one still loads
     assert fresh.env.world.code == good["state"]["env"]["world"]
 
+
+def test_a_world_the_simulation_never_reaches_is_refused(thesis):
+    """A person near the robot at R is a world of a robot (a sensed relation); the simulation derives the
+    relation from the locations, so a checkpoint that puts it there is refused whole."""
+    good, config = world_at_tick_20(thesis, 2)
+    bad = copy.deepcopy(good)
+    bad["state"]["env"]["world"] = thesis.encode({"robot.location": "R", "human.relation": "near", "intention": "none",
+                                                  **thesis.open["initial_objects"]})
+    fresh = SimWorldSide(thesis, 2, intention_accuracy=True)
+    before = fresh.env.state()
+    with pytest.raises(CheckpointError, match="not the simulation's") as exc:
+        restore_world(fresh, bad, config, "f")
+    assert "\n" not in str(exc.value) and fresh.env.state() == before
+
