@@ -175,13 +175,13 @@ def _objects(v, voc, where):
 
 
 _HUMAN_FIELDS = _obj({"presence": (_one_of("presences"), True), "relation": (_one_of("relations"), True)})
-ABSENT = "absent"  # the one value presence and relation share: each is absent iff the other is
+_ABSENT = "absent"  # the one value presence and relation share: each is absent iff the other is
 
 
 def _human(v, voc, where):
     """The human of a world: presence and relation, which must agree (absent iff absent)."""
     out = _HUMAN_FIELDS(v, voc, where)
-    if (out["presence"] == ABSENT) != (out["relation"] == ABSENT):
+    if (out["presence"] == _ABSENT) != (out["relation"] == _ABSENT):
         raise Rejected(f"{where}: presence {out['presence']!r} contradicts relation {out['relation']!r}")
     return out
 

@@ -17,10 +17,9 @@ it changes anything, and a checkpoint of another scenario, human or recognition 
 
 from __future__ import annotations
 
-from homeo_decision.checkpoint import CheckpointError, check_codes, check_int as _int, check_number as _num, codes_print
-from homeo_decision.checkpoint import envelope
+from homeo_decision.checkpoint import CheckpointError, check_codes, check_int as _int, check_number as _num
 from homeo_decision.checkpoint import check_world_position as check_position
-from homeo_decision.checkpoint import scenario_print
+from homeo_decision.checkpoint import codes_print, envelope, scenario_print
 from homeo_decision.codec import vocabulary
 
 NODE = "homeo_sim"

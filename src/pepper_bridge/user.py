@@ -23,10 +23,10 @@ scale: default 8 of 10, e.g. ``[[2, 8], [1, 8, 0, 0, 0], 7]``) otherwise when ``
 true). A missed intention is expressed again, up to ``patience`` attempts (default 1). An
 interaction with ``"intention": null`` expresses nothing and answers nothing; ``calm`` (a level, e.g. 6)
 adds a calm voice to the answer (``[[1, 6], [6, 1, 0, 0, 0], 1]`` on 0..10: not a scolding). ``presence``
-("present" / "absent") moves the user before expressing; ``walks`` ("to_robot" / "home") has the person walk
-up to the robot, wherever it stands, or back to the user's place before expressing (the stand-in places the
-person: ``standin_person``; a timed entry may carry ``presence`` and ``walks`` too). ``helps`` (default true, per interaction or for the whole
-file): asked for help with the plug (an action of the config that sets the plug variable: the thesis's
+("present" / "absent") moves the user before expressing; ``walks`` ("to_robot" / "home") has the person
+walk up to the robot, wherever it stands, or back to the user's place before expressing (the stand-in
+places the person: ``standin_person``; a timed entry may carry ``presence`` and ``walks`` too).
+``helps`` (default true, per interaction or for the whole file): asked for help with the plug (an action of the config that sets the plug variable: the thesis's
 Attach / Detach), the user plugs / unplugs the robot when it stands where the plugged object is (the charger). ``start`` sets the stand-in body; ``robot`` holds the robot's initial internal
 drives for the field driver. Timed entries fire at ``at`` wall seconds after the user starts
 (when the robot first starts its speech recognition).
