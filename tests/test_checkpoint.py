@@ -295,3 +295,17 @@ def _drives_answer(sc, host) -> dict:
     world = codec.world_fields(sc, obs)
     perceived = host.perception.tick(obs.code, obs.intention, obs.body, None)
     return codec.drives_fields(sc, perceived, world, None, host.perception.after_action)
+
+
+# -- world codes saved under another numbering (issue 22: the relation became part of the world code) --------
+def test_a_drives_checkpoint_records_how_its_world_codes_are_numbered(thesis):
+    from homeo_decision.hosts import PerceptionHost
+
+    host = PerceptionHost(thesis)
+    ck = json.loads(json.dumps(checkpoint.drives_checkpoint(host.perception, 0, 0, _drives_answer(thesis, host))))
+    assert ck["state"]["world_codes"] == checkpoint.codes_print(thesis) == checkpoint.digest(thesis.code_layout())
+    assert thesis.code_layout()[:3] == [["robot.location", ["H", "C", "R"]], ["human.relation", ["near", "far", "absent"]],
+                                        ["intention", thesis.intention_names]]
+    fresh = PerceptionHost(thesis)
+    checkpoint.restore_drives(fresh, ck)
+    assert fresh.perception.prev_code == host.perception.prev_code

@@ -6,7 +6,11 @@ import json
 
 import pytest
 
-from homeo_decision.codec import vocabulary, world_state
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from homeo_decision.codec import vocabulary, world_code, world_state
+from homeo_decision.scenario import ScenarioError
 from homeo_msgs_py.lockstep import TickJoin
 from homeo_msgs_py.schemas import Message, Rejected, decode, encode
 from homeo_msgs_py.diagnostics import RejectLog
@@ -90,6 +94,43 @@ def test_scenario_values_are_checked(thesis, voc):
     with pytest.raises(Rejected, match=r"feedback must be \+1, -1 or 0"):
         decode(encode("homeo/outcome", 0, {"action": None, "feedback": 2, "proposal": None,
                                            "clarified_intention": None}), voc)
+
+
+PRESENCES, RELATIONS = ("present", "absent"), ("near", "far", "absent")
+HUMAN_VALUES = st.one_of(st.sampled_from(PRESENCES + RELATIONS), st.text(max_size=8), st.none(), st.integers(),
+                         st.booleans(), st.lists(st.text(max_size=3), max_size=2))
+
+
+@settings(max_examples=300, deadline=None)
+@given(HUMAN_VALUES, HUMAN_VALUES, st.sampled_from(["homeo/world", "homeo/drives"]))
+def test_a_world_whose_presence_contradicts_its_relation_is_refused(thesis, voc, presence, relation, schema):
+    """homeo/world and homeo/drives' world carry both; they must agree (absent iff absent), so a world
+    node cannot say "near" and "absent" at once; the world code is then the relation's."""
+    w = _world(thesis)
+    w["human"] = {"presence": presence, "relation": relation}
+    fields = w if schema == "homeo/world" else {
+        "drives": dict.fromkeys(thesis.drive_names, 0.0), "stimuli": dict.fromkeys(thesis.motivation_names, 0.0),
+        "intensities": dict.fromkeys(thesis.motivation_names, 0.0), "m_dom": thesis.motivation_names[0],
+        "intention": "none", "world": {k: w[k] for k in ("robot", "objects", "human")}}
+    valid = presence in PRESENCES and relation in RELATIONS and (presence == "absent") == (relation == "absent")
+    if not valid:
+        with pytest.raises(Rejected) as e:
+            decode(encode(schema, 0, fields), voc, schema)
+        assert "\n" not in str(e.value)
+        return
+    m = decode(encode(schema, 0, fields), voc, schema)
+    world = m.fields if schema == "homeo/world" else m.fields["world"]
+    code = world_code(thesis, world)
+    assert thesis.view(code)["human.relation"] == relation and thesis.view(code)["robot.location"] == "R"
+
+
+def test_a_contradiction_names_both_values(thesis, voc):
+    w = _world(thesis)
+    w["human"] = {"presence": "absent", "relation": "near"}
+    with pytest.raises(Rejected, match="human: presence 'absent' contradicts relation 'near'"):
+        decode(encode("homeo/world", 0, w), voc)
+    with pytest.raises(ScenarioError, match="contradicts"):  # the codec refuses it too (an in-process world)
+        world_code(thesis, w)
 
 
 def test_every_topic_has_a_schema():

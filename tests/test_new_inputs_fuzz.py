@@ -387,3 +387,26 @@ def test_any_launcher_command_line_parses_or_is_one_line_error(argv):
         build_parser().parse_args(argv)
     except UserError as exc:
         assert "\n" not in str(exc) and "\r" not in str(exc)
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.one_of(st.just(None), st.text(max_size=20), st.integers(), st.lists(st.integers(), max_size=2)))
+def test_a_drives_checkpoint_of_other_world_codes_is_refused_in_one_line_and_changes_nothing(thesis, saved):
+    """A checkpoint written before the world code held the relation (no ``world_codes``) or of another
+    numbering: its prev_code would name another world, so it is refused before anything changes."""
+    from homeo_decision import checkpoint
+    from homeo_decision.hosts import PerceptionHost
+    from test_checkpoint import _drives_answer
+
+    host = PerceptionHost(thesis)
+    ck = json.loads(json.dumps(checkpoint.drives_checkpoint(host.perception, 0, 0, _drives_answer(thesis, host))))
+    if saved is None:
+        del ck["state"]["world_codes"]  # as every checkpoint written before issue 22
+    else:
+        ck["state"]["world_codes"] = saved
+    fresh = PerceptionHost(thesis)
+    before = checkpoint.drives_learned(fresh.perception)
+    with pytest.raises(CheckpointError, match="world codes this program would misread") as e:
+        checkpoint.restore_drives(fresh, ck, "f")
+    assert "\n" not in str(e.value) and str(e.value).startswith("f: ")
+    assert checkpoint.drives_learned(fresh.perception) == before

@@ -26,9 +26,70 @@ def after(sc, code, action):
 # -- the compiled world -----------------------------------------------------------------
 
 def test_thesis_world_variables(thesis):
-    # robot location 3 x presence 2 x intention (none + 6) x charger 2 x player 2 x light 2
-    assert thesis.n_codes == 3 * 2 * 7 * 2 * 2 * 2
+    # robot location 3 x human relation 3 x intention (none + 6) x charger 2 x player 2 x light 2
+    assert thesis.n_codes == 3 * 3 * 7 * 2 * 2 * 2
+    assert thesis.base_vars[:3] == ("robot.location", "human.relation", "intention")
     assert thesis.object_names == ["charger", "player", "light", "null"]
+
+
+def test_toy_world_codes_by_hand(toy):
+    # mixed radix over robot.location (H, B) x human.relation (near, far, absent) x intention
+    # (none, on, come) x box.status (off, on): code = ((loc * 3 + rel) * 3 + intention) * 2 + status
+    assert toy.n_codes == 2 * 3 * 3 * 2 == 36
+    assert toy.encode({"robot.location": "B", "human.relation": "near", "intention": "come", "box.status": "on"}) \
+        == ((1 * 3 + 0) * 3 + 2) * 2 + 1 == 23  # a person walked up to the robot at B (a robot only)
+    # a presence stands for the located relation: at B the human (at H) is far
+    assert toy.encode({"robot.location": "B", "human.presence": "present", "intention": "come", "box.status": "on"}) \
+        == ((1 * 3 + 1) * 3 + 2) * 2 + 1 == 29
+    assert toy.view(23)["human.presence"] == "present" and toy.view(23)["box.distance"] == "near"
+    assert toy.c.hum[23] == 2 * 3 + 0  # S_hum = intention x relation (Eq 3.9): (come, near)
+    assert toy.c.with_relation[23] == (23, 29, 35)
+    assert toy.c.with_presence[23] == (29, 35)  # present where the simulation places the human, or absent
+
+
+def test_presence_and_relation_must_agree(toy):
+    for pres, rel in (("absent", "near"), ("absent", "far"), ("present", "absent")):
+        with pytest.raises(ScenarioError, match="contradicts"):
+            toy.encode({"robot.location": "H", "human.presence": pres, "human.relation": rel, "intention": "none",
+                        "box.status": "off"})
+    with pytest.raises(ScenarioError, match="human.presence"):
+        toy.encode({"robot.location": "H", "human.presence": "gone", "intention": "none", "box.status": "off"})
+
+
+def test_a_sensed_relation_is_the_worlds_wherever_the_robot_is(thesis):
+    near_at_r = thesis.encode({"robot.location": "R", "human.relation": "near", "intention": "none",
+                               **thesis.open["initial_objects"]})
+    v = thesis.view(near_at_r)
+    assert v["human.relation"] == "near" and v["human.presence"] == "present"
+    assert "Chat" in valid_names(thesis, near_at_r) and "Rest" not in valid_names(thesis, near_at_r)  # Table 3.3
+    # Table 3.2: the human is not absent (Social +10) and R is the resting place (Relaxative +10)
+    assert dict(zip(thesis.motivation_names, thesis.c.stim[near_at_r])) == {
+        "Serving": 0.0, "Social": 10.0, "Relaxative": 10.0, "Survival": 0.0}
+    # the next world: staying keeps the person where they are; a move derives the relation from the locations
+    assert after(thesis, near_at_r, "Chat")["human.relation"] == "near"
+    assert after(thesis, near_at_r, "MoveToC")["human.relation"] == "far"
+    assert after(thesis, near_at_r, "MoveToH")["human.relation"] == "near"
+    absent_at_r = thesis.c.with_relation[near_at_r][2]
+    assert after(thesis, absent_at_r, "MoveToH")["human.relation"] == "absent"
+
+
+def test_the_simulation_reaches_exactly_the_located_worlds(thesis):
+    """From the initial world, the simulation's moves (actions, the human coming and going, its
+    intentions) reach the worlds whose relation is the one the locations give: 3 locations x
+    (near-or-far as located, absent) x 7 intentions x 8 object states = 336, the old count."""
+    c = thesis.c
+    start = thesis.encode({"robot.location": thesis.open["initial_location"], "human.presence": "present",
+                           "intention": "none", **thesis.open["initial_objects"]})
+    seen, todo = {start}, [start]
+    while todo:
+        code = todo.pop()
+        for nxt in (*c.next_code[code], *c.with_presence[code], *c.with_intention[code]):
+            if nxt not in seen:
+                seen.add(nxt)
+                todo.append(nxt)
+    located = {code for code in range(thesis.n_codes) if thesis.view(code)["human.relation"] == thesis.located_relation(
+        thesis.view(code)["robot.location"], thesis.view(code)["human.presence"])}
+    assert seen == located and len(located) == 3 * 2 * 7 * 8
 
 
 def test_encode_decode_round_trip(thesis):
@@ -57,15 +118,13 @@ def test_attach_and_stay_only_when_charger_near(thesis):
 def test_chat_only_when_human_near(thesis):
     for code in range(thesis.n_codes):
         w = thesis.decode(code)
-        near = w["robot.location"] == "H" and w["human.presence"] == "present"
-        assert ("Chat" in valid_names(thesis, code)) == near, w
+        assert ("Chat" in valid_names(thesis, code)) == (w["human.relation"] == "near"), w
 
 
 def test_rest_only_when_human_not_near(thesis):
     for code in range(thesis.n_codes):
         w = thesis.decode(code)
-        near = w["robot.location"] == "H" and w["human.presence"] == "present"
-        assert ("Rest" in valid_names(thesis, code)) == (not near), w
+        assert ("Rest" in valid_names(thesis, code)) == (w["human.relation"] != "near"), w
 
 
 def test_unconstrained_actions_always_valid(thesis):

@@ -122,8 +122,10 @@ def test_new_intention_after_satisfaction_is_reasonable(always, enc):
 
 
 def test_new_intentions_are_reasonable_everywhere(always):
+    # every world with the human present, the robot-only ones too (a person near the robot away from H):
+    # the simulated human judges where the simulation places it (Table 4.3 by the locations)
     for code in range(always.n_codes):
-        w = always.decode(code)
+        w = always.view(code)
         if w["human.presence"] != "present" or w["intention"] != "none":
             continue
         allowed = expected_reasonable(w)
@@ -239,7 +241,8 @@ def test_action_effects_split_between_body_and_robot(thesis, enc):
 
 def test_world_initial_state_from_open_choices(thesis):
     w = World(thesis)
-    assert thesis.decode(w.code) == {"robot.location": "R", "human.presence": "present", "intention": "none",
+    # the human present at H, the robot at R: far (Section 4.2.1)
+    assert thesis.decode(w.code) == {"robot.location": "R", "human.relation": "far", "intention": "none",
                                      "charger.status": "idle", "player.status": "idle", "light.status": "off"}
 
 
@@ -249,9 +252,11 @@ def test_world_execute_and_set_human(thesis):
     assert w.execute(thesis.action_index("MoveToC")) == start
     assert thesis.decode(w.code)["robot.location"] == "C"
     w.set_human(False, 0)
-    assert thesis.decode(w.code)["human.presence"] == "absent"
+    assert thesis.view(w.code)["human.presence"] == "absent" and thesis.decode(w.code)["human.relation"] == "absent"
     w.set_human(True, thesis.intention_names.index("come"))
-    assert thesis.decode(w.code)["intention"] == "come"
+    assert thesis.decode(w.code)["intention"] == "come" and thesis.decode(w.code)["human.relation"] == "far"
+    w.execute(thesis.action_index("MoveToH"))  # the relation follows the robot's move
+    assert thesis.decode(w.code)["human.relation"] == "near"
 
 
 # -- the runner's loop, checked line by line from its trace ------------------------------------

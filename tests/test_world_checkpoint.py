@@ -180,6 +180,7 @@ def test_an_undisturbed_bus_run_records_every_tick(thesis):
 
 @pytest.mark.parametrize("field,value", [
     ("params.scenario", "0123"), ("params.human", "person"), ("params.intention_accuracy", False),
+    ("params.world_codes", "0123456789abcdef"), ("params.world_codes", None),
     ("params.rate", -1.0), ("params.iterations", "5"), ("rng.human", {"block": 4096, "drawn": 5000}),
     ("params.world", "pepper"), ("rng.observation", None), ("state.world.env.world", 10**9),
     ("state.world.env.body", [1.0]), ("state.world.env.tick", 3), ("state.world.env.cues", {"gesture": "moonwalk"}),
@@ -203,3 +204,31 @@ def test_a_corrupt_world_checkpoint_is_refused_whole_with_one_line(thesis, field
         host.restore(bad, "f")
     assert "\n" not in str(exc.value) and str(exc.value).startswith("f")
     assert (fresh.env.state(), fresh.rec.state(), fresh.hits.state(), drv.position()) == before
+
+
+def test_a_world_checkpoint_written_before_the_codes_held_the_relation_is_refused(thesis):
+    """Its ``state.world.env.world`` counts presence, not relation (issue 22): read now it would be another world."""
+    good = world_at_tick_20(thesis, 2)
+    old = copy.deepcopy(good)
+    del old["params"]["world_codes"]
+    host = sim_host(thesis, 2, lambda *a: None, 40)
+    with pytest.raises(CheckpointError, match="written before world codes held the human's relation") as exc:
+        host.restore(old, "f")
+    assert "\n" not in str(exc.value)
+    host.restore(copy.deepcopy(good), "f")  # the current one still loads
+    assert host.world.env.world.code == good["state"]["world"]["env"]["world"]
+
+
+def test_a_world_the_simulation_never_reaches_is_refused(thesis):
+    """A person near the robot at R is a world of a robot (a sensed relation); the simulation derives the
+    relation from the locations, so a checkpoint that puts it there is refused whole."""
+    good = world_at_tick_20(thesis, 2)
+    bad = copy.deepcopy(good)
+    bad["state"]["world"]["env"]["world"] = thesis.encode({"robot.location": "R", "human.relation": "near",
+                                                           "intention": "none", **thesis.open["initial_objects"]})
+    host = sim_host(thesis, 2, lambda *a: None, 40)
+    before = host.world.env.state()
+    with pytest.raises(CheckpointError, match="not the simulation's") as exc:
+        host.restore(bad, "f")
+    assert "\n" not in str(exc.value) and host.world.env.state() == before
+

@@ -86,6 +86,21 @@ def scenario_print(sc) -> str:
     return digest({"raw": sc.raw, "open": sc.open})
 
 
+def codes_print(sc) -> str:
+    """How a checkpoint's world codes are numbered (``Scenario.code_layout``): a world code saved under
+    another numbering (one written before the world code held the sensed relation, issue 22) would
+    be read as another world, so it is refused."""
+    return digest(sc.code_layout())
+
+
+def check_codes(saved, ours: str, where: str) -> None:
+    """Refuse (one line) a checkpoint whose world codes are not numbered as ``ours`` (``codes_print``)."""
+    if saved != ours:
+        why = ("it records none: written before world codes held the human's relation" if saved is None
+               else "they are numbered otherwise")
+        raise CheckpointError(f"{where}: a checkpoint whose world codes this program would misread ({why})")
+
+
 def check_int(v, what: str, lo: int = 0, hi: int = 2**62) -> int:
     if type(v) is not int or not lo <= v <= hi:
         raise CheckpointError(f"{what} must be an integer in {lo}..{hi}, got {str(v)[:40]!r}")
@@ -286,7 +301,7 @@ def drives_checkpoint(perception, run: int, tick: int, answer: dict, session: st
     world and intention it perceived last, the drives right after the last action) after ``tick``,
     and its answer to that tick (sent again if the world sends the tick again)."""
     p = perception
-    state = {"tick": tick, "values": list(p.model.values), "prev_code": p.prev_code,
+    state = {"tick": tick, "values": list(p.model.values), "prev_code": p.prev_code, "world_codes": codes_print(p.sc),
              "prev_intention": p.prev_intention, "drives": list(p.drives),
              "after_action": list(p.after_action) if p.after_action is not None else None, "answer": answer}
     return envelope(DRIVES, tick + 1, 0, run, {}, None, state, session)
@@ -316,6 +331,7 @@ def restore_drives(host, ck: dict, where: str = "<memory>") -> None:
         return [float(x) for x in v]
 
     tick, code, it = st.get("tick"), st.get("prev_code"), st.get("prev_intention")
+    check_codes(st.get("world_codes"), codes_print(sc), where)
     if type(tick) is not int or not 0 <= tick < 2**62 or tick + 1 != ck["ticks"]:
         raise CheckpointError(f"{where}: corrupt checkpoint (tick {str(tick)[:20]!r} is not ticks - 1)")
     if code is not None and (type(code) is not int or not 0 <= code < sc.n_codes):

@@ -27,9 +27,16 @@ def vocabulary(sc: Scenario) -> Vocabulary:
 
 # -- the world -----------------------------------------------------------------------------
 def world_code(sc: Scenario, world: dict, intention: str = NONE_INTENTION) -> int:
-    """World code of ``homeo/world``'s robot/objects/human seen with ``intention`` (raises ScenarioError)."""
-    values = {"robot.location": world["robot"]["location"], "human.presence": world["human"]["presence"],
+    """World code of ``homeo/world``'s robot/objects/human seen with ``intention`` (raises ScenarioError).
+
+    The human's relation is taken as the world carries it (a robot senses it; the simulation
+    derived it from the locations), never rebuilt from the robot's location; a presence that
+    contradicts it (absent iff absent) is refused."""
+    human = world["human"]
+    values = {"robot.location": world["robot"]["location"], "human.relation": human["relation"],
               "intention": intention}
+    if "presence" in human:
+        values["human.presence"] = human["presence"]
     for o, vars_ in world["objects"].items():
         for var, v in vars_.items():
             values[f"{o}.{var}"] = v

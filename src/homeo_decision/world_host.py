@@ -17,7 +17,8 @@ from typing import Callable
 from homeo_msgs_py.graph import WORLD
 from homeo_msgs_py.lockstep import LockstepDriver
 
-from .checkpoint import CheckpointError, check_int, check_number, check_world_position, envelope, scenario_print
+from .checkpoint import (CheckpointError, check_codes, check_int, check_number, check_world_position, codes_print,
+                         envelope, scenario_print)
 from .codec import vocabulary
 from .world_api import WorldBackend
 
@@ -108,6 +109,7 @@ class WorldHost:
     def run_config(self, trace_bytes: int | None = None) -> dict:
         d = self.driver
         return dict(self.world.run_config(), world=self.world.NAME, scenario=scenario_print(self.sc),
+                    world_codes=codes_print(self.sc),
                     iterations=int(d.iterations), rate=float(d.rate), action_timeout=float(d.timeout),
                     trace_bytes=trace_bytes)
 
@@ -125,6 +127,7 @@ class WorldHost:
         """Go on from a checkpoint of this kind of run; returns the driver's position and takes the
         run's settings from it. Everything is checked before anything changes (CheckpointError)."""
         p, st, ours = ck["params"], ck["state"], self.run_config()
+        check_codes(p.get("world_codes"), ours["world_codes"], where)
         try:
             for key in [k for k in ours if k not in RUN_KEYS and k != "trace_bytes"]:
                 if p.get(key) != ours[key]:

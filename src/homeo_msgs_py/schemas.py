@@ -174,6 +174,18 @@ def _objects(v, voc, where):
     return out
 
 
+_HUMAN_FIELDS = _obj({"presence": (_one_of("presences"), True), "relation": (_one_of("relations"), True)})
+_ABSENT = "absent"  # the one value presence and relation share: each is absent iff the other is
+
+
+def _human(v, voc, where):
+    """The human of a world: presence and relation, which must agree (absent iff absent)."""
+    out = _HUMAN_FIELDS(v, voc, where)
+    if (out["presence"] == _ABSENT) != (out["relation"] == _ABSENT):
+        raise Rejected(f"{where}: presence {out['presence']!r} contradicts relation {out['relation']!r}")
+    return out
+
+
 def _symbol(v, voc, where):
     if v is not None and (not isinstance(v, str) or not v or len(v) > 64):
         raise Rejected(f"{where} must be a short symbol or null, got {v!r}")
@@ -216,7 +228,7 @@ SCHEMAS: dict[str, dict[str, tuple[Check, bool]]] = {
     "homeo/world": {
         "robot": (_obj({"location": (_one_of("locations"), True)}), True),
         "objects": (_objects, True),
-        "human": (_obj({"presence": (_one_of("presences"), True), "relation": (_one_of("relations"), True)}), True),
+        "human": (_human, True),
         # body drives by name, plus raw readings (battery_percent, temperature_status, ...)
         "body": (_map("drives", DRIVE, extra=ANY_NUMBER), True),
         "final": (_bool, False),  # the run ends with this tick: learn, do not act
@@ -244,8 +256,7 @@ SCHEMAS: dict[str, dict[str, tuple[Check, bool]]] = {
         # the world these drives were perceived in (robot, objects, human of homeo/world)
         "world": (_obj({"robot": (_obj({"location": (_one_of("locations"), True)}), True),
                         "objects": (_objects, True),
-                        "human": (_obj({"presence": (_one_of("presences"), True),
-                                        "relation": (_one_of("relations"), True)}), True)}), True),
+                        "human": (_human, True)}), True),
         "after_action": (_map("drives", DRIVE, complete=True), False),  # drives before the time step
         # what tick k-1's action did, as these drives took it in: the decision learns from it
         "outcome": (_obj({"action": (_one_of("actions", nullable=True), True), "feedback": (_feedback, True),

@@ -86,6 +86,9 @@ class SimEnvironment:
             raise ValueError(f"environment tick must be an integer >= 0, got {tick!r}")
         if type(code) is not int or not 0 <= code < sc.n_codes:
             raise ValueError(f"world code must be in 0..{sc.n_codes - 1}, got {code!r}")
+        if sc.c.with_presence[code][sc.c.presence_of[code]] != code:  # a sensed relation: a robot's world only
+            raise ValueError(f"world code {code} is not the simulation's: its human relation is not the one the "
+                             f"locations give")
         if not isinstance(body, list) or len(body) != len(sc.drives) or not all(
                 type(x) in (int, float) and 0.0 <= x <= 100.0 for x in body):
             raise ValueError(f"body must be {len(sc.drives)} numbers in 0..100")

@@ -1,7 +1,9 @@
 """The simulated home: robot location, object states, and the human's presence (Section 4.2.1).
 
 The whole world is one world code of the scenario (see ``homeo_decision.scenario``);
-actions move it through the compiled effect table (Table 4.1).
+actions move it through the compiled effect table (Table 4.1). The human stays at the scenario's
+human location: its relation to the robot is derived from the two locations (Section 4.2.1: near
+iff the robot is there), on every move and whenever the human comes or goes.
 """
 
 from __future__ import annotations
@@ -28,5 +30,6 @@ class World:
         return before
 
     def set_human(self, present: bool, intention: int) -> None:
+        """The human present at its location (the located relation) or absent, wanting ``intention``."""
         c = self.sc.c
         self.code = c.with_intention[c.with_presence[self.code][0 if present else 1]][intention]

@@ -23,6 +23,12 @@ help at the charger; moving away unplugs it); heat rises ``heat_per_m`` per metr
 ``heat_awake`` /s awake, falls ``cool_rest`` /s at rest; the wheel and leg joints' temperature
 status is floor(heat) (0..3), the other joints' floor(heat / 2).
 
+The scripted user is a person (``standin_person.StandinPerson``) standing in front of the robot's spot at
+the user's place; the script may have them walk up to the robot wherever it is (``"walks": "to_robot"``)
+and back (``"home"``). The engagement zones and the people list are computed from where the person
+stands, as ALEngagementZones and ALPeoplePerception document them (``ALEngagementZones.getFirstLimitDistance``,
+``getSecondLimitDistance``, ``getLimitAngle`` and ``computeEngagementZone(x, y, z)`` answer with the same limits).
+
 Every call received is recorded (``calls()``), memory keys can be forced to wrong values
 (``inject``), the robot can disappear and come back on the same URL (``drop`` /
 ``restart``), and it can freeze: stop answering with its connection open (``freeze_for``:
@@ -49,12 +55,12 @@ from homeo_decision.rng import component_rng
 
 from .config import PepperConfig, load_config
 from .mapping import (AUTO_NAOQI, BATTERY_KEY, EMOTION_EVENT, PEOPLE_KEY, PEPPER_JOINTS, PLUGGED_KEY, TOUCH_EVENTS,
-                      WORD_EVENT, ZONE_KEYS, emotion_scale, temperature_key)
+                      WORD_EVENT, ZONE_KEYS, emotion_scale, relation_from_zones, temperature_key)
 from . import naoqi_link
+from .standin_person import PEPPER_LIFE_LIMITS, StandinPerson, ZoneLimits, engagement_zone
 from .user import ScriptedUser, load_script, timed_entry_emits
 
 MOTION_JOINTS = ("HipRoll", "HipPitch", "KneePitch", "WheelFL", "WheelFR", "WheelB")
-PERSON_ID = 17
 STANDIN_NAOQI = "2.5.5.5"  # what ALSystem.systemVersion answers when neither the config nor the caller fixes it
 
 
@@ -83,7 +89,8 @@ class StandinRobot:
     def __init__(self, config: PepperConfig | None = None, script: dict | None = None, *, seed: int = 0,
                  battery: float | None = None, time_scale: float = 1.0, listen: str = "tcp://127.0.0.1:0",
                  refuse_subscriber: bool = False, body: BodyParams | None = None, desired: dict | None = None,
-                 scenario=None, clock=time.monotonic, naoqi_version: str | None = None):
+                 scenario=None, clock=time.monotonic, naoqi_version: str | None = None,
+                 zone_limits: ZoneLimits = PEPPER_LIFE_LIMITS):
         self.cfg = config or load_config()
         self.script = script or {"schema": "homeo-pepper-user", "version": 1}
         self.rng = component_rng(seed, "standin")
@@ -117,7 +124,11 @@ class StandinRobot:
             scenario = load_scenario()
         if desired is None:
             desired = {i.name: tuple(i.desired) for i in scenario.intentions}
-        self.user_place = scenario.human_location  # the user stays there (the scenario's human)
+        self.user_place = scenario.human_location  # the user's place (the scenario's human location)
+        if self.user_place not in self.cfg.places:
+            raise ValueError(f"the stand-in's person stands at the user's place {self.user_place!r}, which the "
+                             f"config's places do not locate ({', '.join(self.cfg.places)})")
+        self.person = StandinPerson(self.cfg.places[self.user_place], zone_limits)
         plug_obj = self.cfg.plug["variable"].partition(".")[0] if self.cfg.plug else None
         self.user = ScriptedUser(self.script, desired, self.cfg.gesture_event, self.cfg.movement_event,
                                  plug_actions=self.cfg.plug_actions(),
@@ -261,10 +272,20 @@ class StandinRobot:
     def location(self) -> str | None:
         return self.cfg.place_at(self.x, self.y)
 
+    def people(self) -> dict:
+        """The people keys of ALMemory: where the person stands, seen from the robot (standin_person)."""
+        return self.person.memory((self.x, self.y), self.user.present)
+
     def relation(self) -> str:
-        if not self.user.present:
-            return "absent"
-        return "near" if self.location == self.user_place else "far"
+        """What the bridge reads from these keys (zone 1 near; 2, 3 or only tracked far; else absent)."""
+        m = self.people()
+        return relation_from_zones(*(m[k] for k in (*ZONE_KEYS, PEOPLE_KEY)))
+
+    def _walk(self) -> None:
+        """Lock held: where the script last asked the person to walk (to the robot, wherever it is, or home)."""
+        where = self.user.take_walk()
+        if where is not None:
+            self.person.walk(where, (self.x, self.y))
 
     def statuses(self) -> dict:
         h = int(self.heat)
@@ -275,19 +296,15 @@ class StandinRobot:
 
         Formats (docs/PEPPER.md, "NAOqi as documented"): joint temperature status 0..3
         (http://doc.aldebaran.com/2-8/family/pepper_technical/pepper_dcm/actuator_sensor_names.html);
-        EngagementZones/PeopleInZone1..3 and PeoplePerception/PeopleList: lists of person ids
-        (http://doc.aldebaran.com/2-8/naoqi/peopleperception/alengagementzones.html); the battery
+        EngagementZones/PeopleInZone1..3 and PeoplePerception/PeopleList: lists of person ids, the zones
+        from where the person stands (``standin_person``, its pages beside each value); the battery
         charge as the bridge reads it (a 0..1 fraction; no page in the corpus confirms the range)."""
         d = self.data
         d[BATTERY_KEY] = round(self.battery / 100.0, 6)
         d[PLUGGED_KEY] = self.plugged
         for j, s in self.statuses().items():
             d[temperature_key(j)] = s
-        rel = self.relation()
-        d[ZONE_KEYS[0]] = [PERSON_ID] if rel == "near" else []
-        d[ZONE_KEYS[1]] = [PERSON_ID] if rel == "far" else []
-        d[ZONE_KEYS[2]] = []
-        d[PEOPLE_KEY] = [PERSON_ID] if rel != "absent" else []
+        d.update(self.people())
         d.update(self.injected)
 
     def state(self) -> dict:
@@ -321,6 +338,7 @@ class StandinRobot:
         r = self.user.react(action, self.location)
         if r.plug is not None:
             self.plugged = r.plug
+        self._walk()
         self._apply_item()
         self._publish()
         return r.emits
@@ -357,6 +375,7 @@ class StandinRobot:
             if self.user.started:
                 return
             emits = self.user.start()
+            self._walk()
             self._apply_item()
             self._publish()
             timed = sorted(self.script.get("timed", []), key=lambda e: e["at"])
@@ -373,6 +392,9 @@ class StandinRobot:
             with self.lock:
                 if "presence" in e:
                     self.user.present = e["presence"] == "present"
+                if "walks" in e:
+                    self.person.walk(e["walks"], (self.x, self.y))
+                if "presence" in e or "walks" in e:
                     self._publish()
             self.emit(timed_entry_emits(e, self.cfg.gesture_event, self.cfg.movement_event, self.emotion_scale))
 
@@ -532,7 +554,30 @@ class StandinRobot:
             return Extractor
 
         ALPeoplePerception = extractor("ALPeoplePerception")
-        ALEngagementZones = extractor("ALEngagementZones")
+
+        class ALEngagementZones(extractor("ALEngagementZones")):  # qi serves the extractor's methods too
+            """The zones' limits and computeEngagementZone(x, y, z) (a point in FRAME_ROBOT -> its zone)
+            (http://doc.aldebaran.com/2-4/naoqi/peopleperception/alengagementzones-api.html)."""
+
+            @qi.bind(qi.Float, [])
+            def getFirstLimitDistance(self):
+                robot.record("ALEngagementZones", "getFirstLimitDistance")
+                return robot.person.limits.first
+
+            @qi.bind(qi.Float, [])
+            def getSecondLimitDistance(self):
+                robot.record("ALEngagementZones", "getSecondLimitDistance")
+                return robot.person.limits.second
+
+            @qi.bind(qi.Float, [])
+            def getLimitAngle(self):
+                robot.record("ALEngagementZones", "getLimitAngle")
+                return robot.person.limits.angle
+
+            @qi.bind(qi.Int32, [qi.Float, qi.Float, qi.Float])
+            def computeEngagementZone(self, x, y, z):
+                robot.record("ALEngagementZones", "computeEngagementZone", x, y, z)
+                return engagement_zone(float(x), float(y), robot.person.limits)
         # EmotionRecognized values come from user.angry_voice / calm_voice: the documented shape and
         # scale (http://doc.aldebaran.com/2-5/naoqi/audio/alvoiceemotionanalysis.html: 0..10; 2-4: 0..5)
         ALVoiceEmotionAnalysis = extractor("ALVoiceEmotionAnalysis")

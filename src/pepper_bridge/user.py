@@ -12,7 +12,7 @@ A user file (``scripts/*.json``, schema ``homeo-pepper-user``)::
         {"presence": "absent"}
      ],
      "timed": [{"at": 1.5, "touch": "FrontTactilTouched"}, {"at": 2.0, "anger": 8}, {"at": 2.2, "calm": 6},
-               {"at": 2.5, "words": [["Play", 0.8]]}, {"at": 3.0, "presence": "far"}]}
+               {"at": 2.5, "words": [["Play", 0.8]]}, {"at": 3.0, "presence": "absent"}]}
 
 Interactions are reactive, one per robot action: the user expresses the intention (a gesture
 event, a movement event, one ``WordRecognized`` per word), watches what the robot does, and
@@ -23,8 +23,10 @@ scale: default 8 of 10, e.g. ``[[2, 8], [1, 8, 0, 0, 0], 7]``) otherwise when ``
 true). A missed intention is expressed again, up to ``patience`` attempts (default 1). An
 interaction with ``"intention": null`` expresses nothing and answers nothing; ``calm`` (a level, e.g. 6)
 adds a calm voice to the answer (``[[1, 6], [6, 1, 0, 0, 0], 1]`` on 0..10: not a scolding). ``presence``
-("present" / "absent") moves the user before expressing. ``helps`` (default true, per interaction or for the whole
-file): asked for help with the plug (an action of the config that sets the plug variable: the thesis's
+("present" / "absent") moves the user before expressing; ``walks`` ("to_robot" / "home") has the person
+walk up to the robot, wherever it stands, or back to the user's place before expressing (the stand-in
+places the person: ``standin_person``; a timed entry may carry ``presence`` and ``walks`` too).
+``helps`` (default true, per interaction or for the whole file): asked for help with the plug (an action of the config that sets the plug variable: the thesis's
 Attach / Detach), the user plugs / unplugs the robot when it stands where the plugged object is (the charger). ``start`` sets the stand-in body; ``robot`` holds the robot's initial internal
 drives for the field driver. Timed entries fire at ``at`` wall seconds after the user starts
 (when the robot first starts its speech recognition).
@@ -49,6 +51,7 @@ from .mapping import EMOTION_EVENT, TOUCH_EVENTS, WORD_EVENT, voice
 SCHEMA = "homeo-pepper-user"
 VERSION = 1
 ROBOT_LIMITS = {"heat": 3.99, "battery_percent": 100, "drop": 600, "freeze": 600}  # an interaction's "robot" keys
+WALKS = ("to_robot", "home")  # where a script may have the person walk
 
 
 class ScriptError(ValueError):
@@ -75,6 +78,7 @@ class ScriptedUser:
     attempts: int = 0
     present: bool = True
     started: bool = False
+    walk: str | None = None  # where the script asked the person to walk, until the stand-in takes it
     log: list = field(default_factory=list)  # one row per judged robot action
 
     def __post_init__(self):
@@ -100,6 +104,8 @@ class ScriptedUser:
             return []
         if "presence" in it:
             self.present = it["presence"] == "present"
+        if "walks" in it:
+            self.walk = it["walks"]
         if not self.present or it.get("intention") is None:
             return []
         out = []
@@ -154,6 +160,11 @@ class ScriptedUser:
     def _next(self):
         self.index += 1
         self.attempts = 0
+
+    def take_walk(self) -> str | None:
+        """Where the person was last asked to walk (once; None: nowhere new)."""
+        where, self.walk = self.walk, None
+        return where
 
 
 def angry_voice(anger: Any, scale: int) -> list:
@@ -220,6 +231,8 @@ def validate_script(raw: Any, where: str = "<memory>", intentions: tuple | None 
             raise ScriptError(f"{where}: interaction {k + 1}: unknown intention {it['intention']!r}")
         if it.get("presence", "present") not in ("present", "absent"):
             raise ScriptError(f"{where}: interaction {k + 1}: presence must be 'present' or 'absent'")
+        if it.get("walks", "home") not in WALKS:
+            raise ScriptError(f"{where}: interaction {k + 1}: walks must be 'to_robot' or 'home'")
         rob = it.get("robot", {})
         if not isinstance(rob, dict) or set(rob) - set(ROBOT_LIMITS) or not all(
                 isinstance(v, (int, float)) and not isinstance(v, bool) and 0 <= v <= ROBOT_LIMITS[key]
@@ -229,4 +242,6 @@ def validate_script(raw: Any, where: str = "<memory>", intentions: tuple | None 
     timed = raw.get("timed", [])
     if not isinstance(timed, list) or not all(isinstance(t, dict) and isinstance(t.get("at"), (int, float)) for t in timed):
         raise ScriptError(f"{where}: 'timed' entries need a number 'at'")
+    if not all(t.get("walks", "home") in WALKS and t.get("presence", "present") in ("present", "absent") for t in timed):
+        raise ScriptError(f"{where}: a timed entry's walks must be 'to_robot' or 'home', its presence 'present' or 'absent'")
     return raw

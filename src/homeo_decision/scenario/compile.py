@@ -4,6 +4,10 @@
 (Table 3.2, summed per motivation for Eq 3.2), the valid actions (Table 3.3 constraints),
 each action's next world and drive change (Table 4.1), the human state S_hum (Eq 3.9) and
 each object's reduced state (Eq 3.10-3.13, 3.24-3.26).
+
+The human's relation is part of the world code (as sensed on a robot); the next-world table is
+the simulation's: an action that moves the robot re-derives the relation from the locations
+(Section 4.2.1), any other leaves it as it was.
 """
 
 from __future__ import annotations
@@ -77,7 +81,7 @@ def _compile(sc: Scenario) -> None:
     for idx in itertools.product(*[range(r) for r in radices]):
         view = {var: base_values[k][i] for k, (var, i) in enumerate(zip(base_vars, idx))}
         loc = view["robot.location"]
-        view["human.relation"] = "absent" if view["human.presence"] == "absent" else ("near" if loc == sc.human_location else "far")
+        view["human.presence"] = "absent" if view["human.relation"] == "absent" else "present"
         for o, spec in sc.objects.items():
             if spec["location"] is not None:
                 view[f"{o}.distance"] = "near" if loc == spec["location"] else "far"
@@ -86,8 +90,11 @@ def _compile(sc: Scenario) -> None:
 
     stim, stim_names, valid, valid_local, next_code, drive_delta = [], [], [], [], [], []
     hum, obj_state, intention_of, relation_of, location_of, presence_of = [], [], [], [], [], []
-    with_intention, with_presence, reasonable = [], [], []
-    loc_k, pres_k, int_k = 0, 1, 2
+    with_intention, with_relation, with_presence, reasonable = [], [], [], []
+    loc_k, rel_k, int_k = 0, 1, 2
+    absent = RELATIONS.index("absent")
+    # the relation where the simulation places its human, per robot location (Section 4.2.1)
+    located = [RELATIONS.index(sc.located_relation(loc, "present")) for loc in base_values[loc_k]]
     on_leave = sc.open["on_leave_effects"]  # objects left behind take their on_leave values
     # Eq 3.17 sums over all of A; Table 3.3's constraints exclude actions (default) or, read as
     # "has no effect", leave them selectable but idle (open choices invalid_actions, always_valid_actions)
@@ -125,12 +132,14 @@ def _compile(sc: Scenario) -> None:
                         for var, val in spec["on_leave"].items():
                             k = base_vars.index(f"{o}.{var}")
                             new[k] = base_values[k].index(val)
+            if new[loc_k] != idx[loc_k] and idx[rel_k] != absent:  # the robot moved: relation from the locations
+                new[rel_k] = located[new[loc_k]]
             nxt.append(encode(new))
             dd.append(tuple(delta))
         next_code.append(tuple(nxt))
         drive_delta.append(tuple(dd))
-        rel = RELATIONS.index(view["human.relation"])
-        hum.append(idx[int_k] * len(RELATIONS) + rel)
+        rel = idx[rel_k]
+        hum.append(idx[int_k] * len(RELATIONS) + rel)  # S_hum = intention x relation (Eq 3.9)
         os_ = []
         for k, axes in enumerate(obj_state_vars):
             si = 0
@@ -141,19 +150,10 @@ def _compile(sc: Scenario) -> None:
         intention_of.append(idx[int_k])
         relation_of.append(rel)
         location_of.append(idx[loc_k])
-        presence_of.append(idx[pres_k])
-        wi = []
-        for i in range(len(intent_names)):
-            new = list(idx)
-            new[int_k] = i
-            wi.append(encode(new))
-        with_intention.append(tuple(wi))
-        wp = []
-        for i in range(len(PRESENCE)):
-            new = list(idx)
-            new[pres_k] = i
-            wp.append(encode(new))
-        with_presence.append(tuple(wp))
+        presence_of.append(PRESENCE.index(view["human.presence"]))
+        with_intention.append(tuple(_with(idx, int_k, i, encode) for i in range(len(intent_names))))
+        with_relation.append(tuple(_with(idx, rel_k, r, encode) for r in range(len(RELATIONS))))
+        with_presence.append((_with(idx, rel_k, located[idx[loc_k]], encode), _with(idx, rel_k, absent, encode)))
         reasonable.append(tuple(i + 1 for i, it in enumerate(sc.intentions) if _holds(it.reasonable, view)))
 
     desired = (frozenset(),) + tuple(frozenset(act_ids[d] for d in it.desired) for it in sc.intentions)
@@ -177,9 +177,16 @@ def _compile(sc: Scenario) -> None:
         location_of=location_of,
         presence_of=presence_of,
         with_intention=with_intention,
+        with_relation=with_relation,
         with_presence=with_presence,
         reasonable=reasonable,
         desired=desired,
         n_hum=len(intent_names) * len(RELATIONS),
     )
 
+
+def _with(idx: list, k: int, value: int, encode) -> int:
+    """The code of the base values ``idx`` with base variable ``k`` set to ``value``."""
+    new = list(idx)
+    new[k] = value
+    return encode(new)

@@ -27,6 +27,8 @@ DRIVE_READINGS = "<drive readings>"  # in OPEN_CHOICES: an object {drive name: o
 # does not lower it (NSoc "is lowered when the robot chats", NRes: joints heat up "in motion or
 # maintaining certain postures" and cool while resting)
 GROWTH_READINGS = ("always", "human_not_near", "robot_moved", "not_lowered")
+# the human's variables: the human (or the robot's senses) sets them, never an action or the initial state
+HUMAN_VARS = ("human.relation", "human.presence", "intention")
 
 # Choices the thesis leaves open, with their defaults and allowed values (a pair of floats =
 # any number in that range; ANY_ACTION = also any action name of the scenario). docs/FIDELITY.md explains each.
@@ -202,13 +204,14 @@ def _scenario_from_dict(raw: Any, source: str, overrides: Mapping[str, Any] | No
     _unique([i.name for i in intentions], "intention", where)
 
     # variables (needed to validate conditions)
-    base_vars = ["robot.location", "human.presence", "intention"]
-    base_values = [list(locations), list(PRESENCE), [NONE_INTENTION] + [i.name for i in intentions]]
+    # the relation is a base variable (a robot senses it); presence is derived from it (model.py)
+    base_vars = ["robot.location", "human.relation", "intention"]
+    base_values = [list(locations), list(RELATIONS), [NONE_INTENTION] + [i.name for i in intentions]]
     for oname, o in objects.items():
         for var, vals in o["variables"].items():
             base_vars.append(f"{oname}.{var}")
             base_values.append(list(vals))
-    derived = {"human.relation": list(RELATIONS)}
+    derived = {"human.presence": list(PRESENCE)}
     for oname, o in objects.items():
         if o["location"] is not None:
             derived[f"{oname}.distance"] = list(DISTANCES)
@@ -229,7 +232,7 @@ def _scenario_from_dict(raw: Any, source: str, overrides: Mapping[str, Any] | No
 
     def check_set(st, ctx):
         for var, val in st.items():
-            if var not in base_vars or var in ("human.presence", "intention"):
+            if var not in base_vars or var in HUMAN_VARS:
                 raise ScenarioError(f"{where}: {ctx} sets {var!r}, which an action cannot set")
             if val not in all_vars[var]:
                 raise ScenarioError(f"{where}: {ctx} sets {var} to {val!r}; values: {all_vars[var]}")
@@ -471,7 +474,7 @@ def _check_open(open_: dict, dnames, objects, base_vars, all_vars, anames, where
     out["initial_location"] = loc
     objs = dict(open_.get("initial_objects", {}))
     for var, val in objs.items():
-        if var not in all_vars or var in ("robot.location", "human.presence", "intention") or var not in base_vars:
+        if var not in all_vars or var in ("robot.location", *HUMAN_VARS) or var not in base_vars:
             raise ScenarioError(f"{where}: open.initial_objects has unknown object variable {var!r}")
         if val not in all_vars[var]:
             raise ScenarioError(f"{where}: open.initial_objects.{var} = {val!r}; values: {all_vars[var]}")

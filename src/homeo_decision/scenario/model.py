@@ -3,9 +3,15 @@
 A scenario is data (JSON), validated on load (``load.py``) and *compiled* (``compile.py``)
 into flat lookup tables so that the per-tick work is a handful of list indexings. Every
 world the scenario can be in is a small integer, the *world code*: a mixed-radix number over
-the base variables (robot location, human presence, intention, each object variable).
-Derived variables (an object's or the human's distance to the robot) are computed from the
-base ones.
+the base variables (robot location, human relation, intention, each object variable).
+Derived variables (the human's presence, an object's distance to the robot) are computed from
+the base ones.
+
+The human's relation to the robot (near / far / absent, Eq 3.9) is a base variable because a
+robot senses it (a Pepper's engagement zones): a person may walk up to the robot wherever it
+stands. The simulation places its human at the scenario's human location and derives the relation
+from the two locations (Section 4.2.1: near iff the robot is there), so it only ever reaches the
+*located* worlds; the others are reachable on a robot.
 
 Conditions (`requires`, `when`, `reasonable`) are ``{variable: [values]}``; a value
 written ``"!x"`` means "anything but x". All listed variables must hold (AND).
@@ -210,9 +216,22 @@ class Scenario:
             },
         }
 
+    def located_relation(self, location: str, presence: str) -> str:
+        """The human's relation as the simulation derives it (Section 4.2.1): the human stays at the
+        scenario's human location, so it is near iff the robot is there (absent when absent)."""
+        return "absent" if presence == "absent" else "near" if location == self.human_location else "far"
+
+    def code_layout(self) -> list:
+        """How world codes are numbered (the base variables and their values, in order): what a
+        saved world code must agree with."""
+        return [[var, list(vals)] for var, vals in zip(self.base_vars, self.base_values)]
+
     # -- observations --------------------------------------------------------
     def encode(self, values: Mapping[str, str]) -> int:
-        """World code of a full assignment of the base variables."""
+        """World code of a full assignment of the base variables. ``human.presence`` may stand for
+        ``human.relation``: the relation is then the located one (``located_relation``); given
+        both, they must agree (absent iff absent)."""
+        values = _relation_of(self, values)
         code = 0
         for var, vals in zip(self.base_vars, self.base_values):
             v = values.get(var)
@@ -231,6 +250,19 @@ class Scenario:
     def view(self, code: int) -> dict[str, str]:
         """Base and derived variables of a world code."""
         return dict(self.c.views[code])
+
+
+def _relation_of(sc: "Scenario", values: Mapping[str, str]) -> Mapping[str, str]:
+    rel, pres = values.get("human.relation"), values.get("human.presence")
+    if pres is None:
+        return values
+    if pres not in PRESENCE:
+        raise ScenarioError(f"human.presence = {pres!r} is not one of {list(PRESENCE)}")
+    if rel is None:
+        return dict(values, **{"human.relation": sc.located_relation(values.get("robot.location"), pres)})
+    if rel in RELATIONS and (rel == "absent") != (pres == "absent"):
+        raise ScenarioError(f"human.presence {pres!r} contradicts human.relation {rel!r}")
+    return values
 
 
 @dataclass
@@ -252,11 +284,14 @@ class Compiled:
     act_obj: tuple  # action -> object index
     act_local: tuple  # action -> index within A_o
     intention_of: list  # code -> intention index (0 = none)
-    relation_of: list  # code -> relation index
+    relation_of: list  # code -> relation index (a base variable: as sensed, or as the simulation located it)
     location_of: list  # code -> location index
-    presence_of: list  # code -> 0 present / 1 absent
+    presence_of: list  # code -> 0 present / 1 absent (derived from the relation)
     with_intention: list  # code -> tuple per intention index of the code with that intention
-    with_presence: list  # code -> tuple per presence index
+    with_relation: list  # code -> tuple per relation index of the code with that relation
+    # code -> (the code with the human present where the simulation places them: the located
+    # relation, Section 4.2.1; the code with the human absent): the simulated human's moves
+    with_presence: list
     reasonable: list  # code -> tuple of intention indices reasonable there (human side)
     desired: tuple  # intention index -> frozenset of action ids
     n_hum: int
