@@ -41,7 +41,7 @@ class Perceiving:
 
     def _init_perception(self, sc: Scenario) -> None:
         self.thresholds = [d.threshold for d in sc.drives]
-        self.tie_break = sc.open["tie_break"]
+        self.tie_break = sc.open.tie_break
         self.none_state = sc.none_state
         self.stim = sc.c.stim
         self.valid = sc.c.valid

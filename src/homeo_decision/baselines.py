@@ -141,11 +141,11 @@ class FlatQ(_Perceiving):
                  gamma: float | None = None, feedback_value: float | None = None):
         super().__init__(sc, seed, dod, xi)
         c = sc.c
-        self.gamma = float(sc.learning["gamma"] if gamma is None else gamma)
+        self.gamma = float(sc.learning[GAMMA.name] if gamma is None else gamma)
         if feedback_value is not None:
             self.f = float(feedback_value)
         self.schedule = schedule_from(sc.learning)
-        self.initial_q = float(sc.open["initial_q"])
+        self.initial_q = float(sc.open.initial_q)
         objs = [k for k, o in enumerate(sc.object_names) if o != NULL_OBJECT]
         n_os = [len(c.obj_state_labels[k]) for k in objs]
         n_ext = 1
@@ -161,7 +161,7 @@ class FlatQ(_Perceiving):
                 s = s * n + c.obj_state[code][k]
             base.append(s)
         self.base = base
-        self.max_over_valid = sc.open["value_max_over"] == "valid"
+        self.max_over_valid = sc.open.value_max_over == "valid"
         self.reset()
 
     def reset(self) -> None:

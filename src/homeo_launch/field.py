@@ -39,8 +39,7 @@ TRAIN_ITERATIONS = 5000
 
 def initial_drives(sc: Scenario, given: dict | None) -> list[float]:
     """The scenario's initial drives, with the script's ``robot.drives`` over them."""
-    init = sc.open["initial_drives"]
-    init = dict(init) if isinstance(init, dict) else dict(zip(sc.drive_names, init))
+    init = dict(zip(sc.drive_names, sc.open.initial_drives))
     init.update(given or {})
     return [float(init[n]) for n in sc.drive_names]
 

@@ -31,7 +31,7 @@ def evaluate(run: RecordedRun, q_table: str, dod: float | None = None) -> dict:
     drives = run.by_tick("drives")
     drives_final = run.by_tick("drives", final=True)
     actions = run.by_tick("action")
-    span_action = sc.open["reward_span"] == "action"
+    span_action = sc.open.reward_span == "action"
     n = agree = 0
     p_sum = w_sum = wr_sum = r_sum = 0.0
     n_r = 0

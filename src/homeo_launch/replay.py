@@ -61,7 +61,7 @@ def series(run: RecordedRun):
     from homeo_sim.metrics import cumulative_series
 
     sc = run.sc
-    key = "after_action" if sc.open["metrics_sample"] == "after_action" else "drives"
+    key = "after_action" if sc.open.metrics_sample == "after_action" else "drives"
     acts = run.by_tick("action")
     acts.update(run.by_tick("action", final=True))
     outs = run.by_tick("outcome")

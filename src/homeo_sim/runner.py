@@ -95,7 +95,7 @@ class Simulation:
         sc, robot = self.sc, self.robot
         # d(t) of the metrics: after the whole iteration, or before the time increase (open choice)
         rec = MetricRecorder(sc.drive_names, [d.threshold for d in sc.drives], keep=self.cfg.series).follow(
-            robot.perception, sc.open["metrics_sample"] == "after_action")
+            robot.perception, sc.open.metrics_sample == "after_action")
         record = rec.on_tick
         bayes = self.cfg.intention == BAYES
         actions: list = []

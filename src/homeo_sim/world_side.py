@@ -24,7 +24,7 @@ class SimWorldSide:
     def __init__(self, sc: Scenario, seed: int = 0, intention_accuracy: bool = False, trace=None, human=None):
         self.sc = sc
         self.intention_accuracy = intention_accuracy  # score the intention each action was chosen for
-        self.sample_after = sc.open["metrics_sample"] == "after_action"
+        self.sample_after = sc.open.metrics_sample == "after_action"
         self.drives_key = "after_action" if self.sample_after else "drives"
         self.trace = trace  # a text file: one JSON line per tick
         self.env = SimEnvironment(sc, seed, cues=True, body_after=True, human=human)

@@ -88,11 +88,11 @@ def _compile(sc: Scenario) -> None:
     hum, obj_state, intention_of, relation_of, location_of, presence_of = [], [], [], [], [], []
     with_intention, with_presence, reasonable = [], [], []
     loc_k, pres_k, int_k = 0, 1, 2
-    on_leave = sc.open["on_leave_effects"]  # objects left behind take their on_leave values
+    on_leave = sc.open.on_leave_effects  # objects left behind take their on_leave values
     # Eq 3.17 sums over all of A; Table 3.3's constraints exclude actions (default) or, read as
     # "has no effect", leave them selectable but idle (open choices invalid_actions, always_valid_actions)
-    all_of_a = sc.open["invalid_actions"] == "no_effect"
-    unconstrained = frozenset(sc.open["always_valid_actions"])
+    all_of_a = sc.open.invalid_actions == "no_effect"
+    unconstrained = frozenset(sc.open.always_valid_actions)
     for code, (view, idx) in enumerate(zip(views, codes_vals)):
         s = [0.0] * len(motivs)
         present = []

@@ -139,8 +139,8 @@ class Scenario:
     intentions: tuple
     feedback_value: float
     praise_change: float
-    learning: dict
-    open: dict
+    learning: dict  # the learning parameters by name (homeo_msgs_py.learning) and the alpha/tau schedule
+    open: "OpenChoices"  # the open choices and the initial state (open_choices.py)
     source: str = "<memory>"
     # compiled
     base_vars: tuple = ()
@@ -165,12 +165,12 @@ class Scenario:
         """The values of m_dom (Eq 3.6): the motivations, and ``none`` when the open choice
         ``no_activated_motivation`` is ``none``."""
         names = self.motivation_names
-        return names + [NO_MOTIVATION] if self.open.get("no_activated_motivation") == "none" else names
+        return names + [NO_MOTIVATION] if self.open.no_activated_motivation == "none" else names
 
     @property
     def none_state(self) -> int:
         """The index of m_dom ``none`` (-1: Eq 3.3's argmax always picks a motivation)."""
-        return len(self.drives) if self.open.get("no_activated_motivation") == "none" else -1
+        return len(self.drives) if self.open.no_activated_motivation == "none" else -1
 
     @property
     def action_names(self) -> list[str]:

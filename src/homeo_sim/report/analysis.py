@@ -92,7 +92,7 @@ def _at(results: Sequence[JobResult], t: int, *path) -> dict:
 def _analyse(sc, base: RunConfig, R: dict, M: dict, seeds: int) -> dict:
     mean = lambda k, *p: _get(M[k], *p)["mean"]  # noqa: E731
     d: dict = {"seeds": seeds, "iterations": base.iterations, "scenario": sc.name, "fingerprint": sc.fingerprint(),
-               "open": sc.open, "base": {"dod": base.dod, "xi": base.xi, "pseudo_update": base.pseudo_update}}
+               "open": sc.open.as_dict(), "base": {"dod": base.dod, "xi": base.xi, "pseudo_update": base.pseudo_update}}
     d["table_4_5"] = M["base"]
     d["sweeps"] = {p: [{"value": v, "metrics": M[f"{p}={v}"]} for v in vals] for p, vals in SWEEPS.items()}
     # early stage of the pseudo-update runs (Fig 4.4)
