@@ -33,6 +33,8 @@ from __future__ import annotations
 
 from typing import Sequence
 
+from homeo_msgs_py.learning import DOD, GAMMA, XI
+
 from .agent import DecisionCore, Learned, Perceiving, Percept
 from .motivation import dod_weights
 from .objectq import phase_at, schedule_from, softmax_pick, softmax_probs
@@ -51,11 +53,11 @@ class _Perceiving(Perceiving):
         self.sc = sc
         self._init_perception(sc)
         self.serving = sc.serving
-        self.dod = float(L["dod"] if dod is None else dod)
-        self.xi = float(L["xi"] if xi is None else xi)
+        self.dod = float(L[DOD.name] if dod is None else dod)
+        self.xi = float(L[XI.name] if xi is None else xi)
         self.weights = dod_weights(self.dod, len(sc.drives), sc.serving)
         self.f = sc.feedback_value
-        self.pseudo = False
+        self.pseudo_update = False
         self.reseed(seed)
 
     def reseed(self, seed: int) -> None:

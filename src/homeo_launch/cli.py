@@ -9,6 +9,7 @@ from homeo_decision.qtable_io import QTableError
 from homeo_decision.scenario import ScenarioError
 from homeo_msgs_py.cli_args import Parser, UserError, float_in, int_at_least, run_command, setting
 from homeo_msgs_py.graph import BAYES, INTENTION_MODES, SEED_MAX, TICKS_MAX
+from homeo_msgs_py.learning import DOD, XI, add_learning_flags
 
 from .durable_args import add_durable_options
 from .live_args import add_live_options
@@ -25,8 +26,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--iterations", type=int_at_least(0, TICKS_MAX), default=5000, help="ticks (0 = until Ctrl-C; default 5000)")
     s.add_argument("--rate", type=float_in(0.0, 1000.0), default=0.0, help="ticks per second (0 = as fast as lockstep allows)")
     s.add_argument("--seed", type=int_at_least(0, SEED_MAX), default=0, help="seed of every component (default 0)")
-    s.add_argument("--dod", type=float_in(0.0, 1.0), default=None, help="Degree of Dedication (Eq 3.27)")
-    s.add_argument("--xi", type=float_in(0.0, 1000.0), default=None, help="motivation factor xi (Eq 3.20)")
+    add_learning_flags(s, (DOD, XI), help_extra=" (default: the scenario's)")
     s.add_argument("--no-pseudo", action="store_true", help="switch off pseudo updates (Eq 3.23)")
     s.add_argument("--intention", choices=INTENTION_MODES, default=BAYES,
                    help="recognise the intention with the Bayesian network (default) or observe it (the thesis's "

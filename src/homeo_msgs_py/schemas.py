@@ -23,6 +23,9 @@ import time
 from dataclasses import dataclass
 from typing import Any, Callable
 
+from .learning import LEARNING
+from .text import one_line  # noqa: F401  (imported from here by many modules)
+
 VERSION = 1
 ENVELOPE = ("schema", "version", "run", "tick", "stamp")
 AUTH_KEY = "auth"  # the graph's signature, appended last (``auth.py``); not part of the fields
@@ -208,6 +211,16 @@ def _any_json(v, voc, where):
     return v
 
 
+def _param(spec) -> Check:
+    """A parameter's value as its declaration (``params.ParamSpec``) takes it: a number in its range,
+    a truth value."""
+    if spec.kind is float:
+        return _num(-math.inf if spec.lo is None else spec.lo, math.inf if spec.hi is None else spec.hi)
+    if spec.kind is bool:
+        return _bool
+    raise TypeError(f"parameter {spec.name}: no message check for {spec.kind.__name__}")
+
+
 DRIVE = _num(0.0, 100.0)
 ANY_NUMBER = _num(-1e9, 1e9)
 
@@ -257,9 +270,8 @@ SCHEMAS: dict[str, dict[str, tuple[Check, bool]]] = {
         "action": (_one_of("actions", nullable=True), True),
         "m_dom": (_one_of("internal_states"), False),
         "tau": (_num(0.0, 1e6), False),
-        "params": (_obj({"dod": (_num(0.0, 1.0), True), "xi": (_num(0.0, 1e6), True),
-                         "gamma": (_num(0.0, 1.0), True), "feedback": (_bool, True),
-                         "pseudo_update": (_bool, True)}), False),
+        # the learning parameters in force, as declared (homeo_msgs_py.learning)
+        "params": (_obj({spec.name: (_param(spec), True) for spec in LEARNING}), False),
         "drives": (_map("drives", DRIVE, complete=True), False),  # the drives the choice was made with
         "intention": (_one_of("intentions"), False),  # the recognised intention it was made for
         "after_action": (_map("drives", DRIVE, complete=True), False),
@@ -335,12 +347,6 @@ def finite(obj):
     if isinstance(obj, (list, tuple)):
         return [finite(v) for v in obj]
     return obj
-
-
-def one_line(text: str) -> str:
-    """``text`` as a reason shows a value someone else chose: on one line, control characters
-    (line breaks among them) escaped."""
-    return text if text.isprintable() else "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 def short(text: str, limit: int = MAX_REASON) -> str:

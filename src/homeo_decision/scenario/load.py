@@ -11,6 +11,8 @@ import json
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
+from homeo_msgs_py.learning import DOD, LEARNING, check_learning
+
 from .compile import _compile
 from .open_choices import Names, parse_open
 from .model import (NONE_INTENTION, NULL_OBJECT, OBS_CHANNELS, PRESENCE, RELATIONS, DISTANCES, SCHEMA,
@@ -18,6 +20,8 @@ from .model import (NONE_INTENTION, NULL_OBJECT, OBS_CHANNELS, PRESENCE, RELATIO
 from .reference import parse_reference
 from .rule_policy import parse_rule_policy
 
+SCHEDULE = "schedule"  # the learning block's alpha/tau phases (objectq.schedule_from)
+DEFAULT_SCHEDULE = ({"from": 0, "alpha": 0.3, "tau": 4.0}, {"from": 1000, "alpha": 0.1, "tau": 2.0})
 ANY_ACTION = "<action>"  # kept for importers: human_proposal_choice may name any action of the scenario
 
 
@@ -231,13 +235,7 @@ def _scenario_from_dict(raw: Any, source: str, overrides: Mapping[str, Any] | No
             raise ScenarioError(f"{where}: object {o!r} has no actions")
 
     fb = raw.get("feedback", {})
-    learning = dict(raw.get("learning", {}))
-    learning.setdefault("gamma", 0.5)
-    learning.setdefault("xi", 1.0)
-    learning.setdefault("dod", 1.0 / len(drives))
-    learning.setdefault("schedule", [{"from": 0, "alpha": 0.3, "tau": 4.0}, {"from": 1000, "alpha": 0.1, "tau": 2.0}])
-    learning.setdefault("pseudo_update", True)
-    _check_learning(learning, where)
+    learning = _check_learning(raw.get("learning", {}), len(drives), where)
 
     block = raw.get("open", {})
     if not isinstance(block, dict):
@@ -353,12 +351,20 @@ def _parse_observations(obs: Any, intention_names: list, where: str) -> Observat
     return ObservationSpec(alphabets, prior_intention, prior, habits)
 
 
-def _check_learning(learning: dict, where: str) -> None:
-    for key, lo, hi in (("gamma", 0.0, 1.0), ("xi", 0.0, 1e6), ("dod", 0.0, 1.0)):
-        v = learning[key]
-        if not isinstance(v, (int, float)) or isinstance(v, bool) or not lo <= v <= hi:
-            raise ScenarioError(f"{where}: learning.{key} = {v!r} is outside [{lo}, {hi}]")
-    sched = learning["schedule"]
+def _check_learning(block: Any, n_drives: int, where: str) -> dict:
+    """The ``learning`` block: the learning parameters as declared (``homeo_msgs_py.learning``; one
+    left out takes the declared default, DoD 1 / number of drives) and the alpha/tau ``schedule``."""
+    if not isinstance(block, dict):
+        raise ScenarioError(f"{where}: learning must be an object")
+    given = {k: v for k, v in block.items() if k != SCHEDULE}
+    try:
+        params = check_learning(given)
+    except ValueError as exc:
+        raise ScenarioError(f"{where}: learning.{exc}") from None
+    defaults = {s.name: s.default for s in LEARNING} | {DOD.name: 1.0 / n_drives}  # equal weights (Eq 3.28)
+    learning = params | {k: v for k, v in defaults.items() if k not in params}
+    learning[SCHEDULE] = block.get(SCHEDULE, [dict(phase) for phase in DEFAULT_SCHEDULE])
+    sched = learning[SCHEDULE]
     if not isinstance(sched, list) or not sched or sched[0].get("from") != 0:
         raise ScenarioError(f"{where}: learning.schedule must be a list starting with from = 0")
     last = -1
@@ -368,3 +374,4 @@ def _check_learning(learning: dict, where: str) -> None:
         if not 0 < s["alpha"] <= 1 or not s["tau"] > 0:
             raise ScenarioError(f"{where}: learning.schedule: alpha must be in (0, 1] and tau > 0")
         last = s["from"]
+    return learning
