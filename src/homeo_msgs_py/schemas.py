@@ -57,10 +57,28 @@ class Message:
 
 
 # -- value checks -------------------------------------------------------------
+# A check takes (value, vocabulary, where) and returns the value kept or raises Rejected. Each also
+# carries ``check.json(voc)``: the JSON Schema of the values it accepts (``json_schemas.py`` walks
+# SCHEMAS with it, for viewers such as Foxglove). What a schema cannot say (probabilities that sum
+# to 1) only the check knows; a value the check accepts the schema accepts too.
 Check = Callable[[Any, "Vocabulary", str], Any]
 
 
+def _schema(of: Callable[["Vocabulary"], dict]):
+    """Attach ``of`` (vocabulary -> JSON Schema) to a check as its ``json``: a function attribute
+    costs the decode nothing."""
+    def attach(check):
+        check.json = of
+        return check
+    return attach
+
+
+def _bounds(lo: float, hi: float) -> dict:
+    return {k: x for k, x in (("minimum", lo), ("maximum", hi)) if math.isfinite(x)}
+
+
 def _num(lo: float, hi: float) -> Check:
+    @_schema(lambda voc: {"type": "number", **_bounds(lo, hi)})
     def check(v, voc, where):
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             raise Rejected(f"{where} must be a number, got {type(v).__name__}")
@@ -71,6 +89,7 @@ def _num(lo: float, hi: float) -> Check:
 
 
 def _int(lo: int, hi: int) -> Check:
+    @_schema(lambda voc: {"type": "integer", "minimum": lo, "maximum": hi})
     def check(v, voc, where):
         if isinstance(v, bool) or not isinstance(v, int):
             raise Rejected(f"{where} must be an integer, got {type(v).__name__}")
@@ -80,12 +99,14 @@ def _int(lo: int, hi: int) -> Check:
     return check
 
 
+@_schema(lambda voc: {"type": "boolean"})
 def _bool(v, voc, where):
     if not isinstance(v, bool):
         raise Rejected(f"{where} must be true or false, got {type(v).__name__}")
     return v
 
 
+@_schema(lambda voc: {"type": "string"})
 def _str(v, voc, where):
     if not isinstance(v, str):
         raise Rejected(f"{where} must be a string, got {type(v).__name__}")
@@ -94,6 +115,7 @@ def _str(v, voc, where):
 
 def _one_of(kind: str, nullable: bool = False) -> Check:
     """A name from the scenario vocabulary ``kind`` (actions, intentions, ...)."""
+    @_schema(lambda voc: {"enum": voc.names(kind) + [None]} if nullable else {"type": "string", "enum": list(voc.names(kind))})
     def check(v, voc, where):
         if v is None and nullable:
             return None
@@ -104,6 +126,7 @@ def _one_of(kind: str, nullable: bool = False) -> Check:
     return check
 
 
+@_schema(lambda voc: {"enum": [-1, 0, 1]})
 def _feedback(v, voc, where):
     if isinstance(v, bool) or v not in (-1, 0, 1):
         raise Rejected(f"{where} must be +1, -1 or 0, got {v!r}")
@@ -112,6 +135,13 @@ def _feedback(v, voc, where):
 
 def _map(key_kind: str, value: Check, complete: bool = False, extra: Check | None = None) -> Check:
     """A JSON object keyed by names of ``key_kind``; ``extra`` admits other keys (e.g. raw readings)."""
+    def schema(voc):
+        names = voc.names(key_kind)
+        out = {"type": "object", "properties": {n: value.json(voc) for n in names},
+               "additionalProperties": extra.json(voc) if extra is not None else False}
+        return out | ({"required": list(names)} if complete else {})
+
+    @_schema(schema)
     def check(v, voc, where):
         if not isinstance(v, dict):
             raise Rejected(f"{where} must be an object, got {type(v).__name__}")
@@ -132,8 +162,15 @@ def _map(key_kind: str, value: Check, complete: bool = False, extra: Check | Non
     return check
 
 
+def object_schema(spec: dict[str, tuple[Check, bool]], voc: "Vocabulary") -> dict:
+    """The JSON Schema of an object of named fields (a payload, a nested object)."""
+    return {"type": "object", "properties": {k: c.json(voc) for k, (c, _) in spec.items()},
+            "required": [k for k, (_, required) in spec.items() if required], "additionalProperties": False}
+
+
 def _obj(spec: dict[str, tuple[Check, bool]]) -> Check:
     """A nested object with named fields; ``(check, required)`` per field; no unknown keys."""
+    @_schema(lambda voc: object_schema(spec, voc))
     def check(v, voc, where):
         if not isinstance(v, dict):
             raise Rejected(f"{where} must be an object, got {type(v).__name__}")
@@ -153,6 +190,15 @@ def _fields(v: dict, spec, voc, where: str) -> dict:
     return out
 
 
+def _objects_schema(voc: "Vocabulary") -> dict:
+    objects = voc.object_vars
+    return {"type": "object", "additionalProperties": False, "required": list(objects), "properties": {
+        o: {"type": "object", "additionalProperties": False, "required": list(vars_),
+            "properties": {var: {"enum": list(values)} for var, values in vars_.items()}}
+        for o, vars_ in objects.items()}}
+
+
+@_schema(_objects_schema)
 def _objects(v, voc, where):
     """``{"charger": {"status": "idle"}, ...}``: every scenario object with every variable."""
     if not isinstance(v, dict):
@@ -177,6 +223,7 @@ def _objects(v, voc, where):
     return out
 
 
+@_schema(lambda voc: {"type": ["string", "null"], "minLength": 1, "maxLength": 64})
 def _symbol(v, voc, where):
     if v is not None and (not isinstance(v, str) or not v or len(v) > 64):
         raise Rejected(f"{where} must be a short symbol or null, got {v!r}")
@@ -184,8 +231,11 @@ def _symbol(v, voc, where):
 
 
 def _prob_map(kind: str) -> Check:
+    probabilities = _map(kind, _num(0.0, 1.0))
+
+    @_schema(probabilities.json)  # that they sum to 1 only the check says
     def check(v, voc, where):
-        out = _map(kind, _num(0.0, 1.0))(v, voc, where)
+        out = probabilities(v, voc, where)
         s = sum(out.values())
         if out and abs(s - 1.0) > 1e-6:
             raise Rejected(f"{where}: probabilities sum to {s:.6f}, not 1")
@@ -196,6 +246,7 @@ def _prob_map(kind: str) -> Check:
 PRAISE_SCOLD = {"praise": 1, "scold": -1}
 
 
+@_schema(lambda voc: {"enum": list(PRAISE_SCOLD) + [None, -1, 0, 1]})
 def _praise_scold(v, voc, where):
     """A person's answer: "praise" or "scold" (or +1 / -1), null or 0 for none; kept as +1/-1/0."""
     if v is None:
@@ -207,6 +258,7 @@ def _praise_scold(v, voc, where):
     raise Rejected(f"{where} must be \"praise\", \"scold\" or null, got {v!r}")
 
 
+@_schema(lambda voc: {})
 def _any_json(v, voc, where):
     return v
 
@@ -221,6 +273,8 @@ def _param(spec) -> Check:
     raise TypeError(f"parameter {spec.name}: no message check for {spec.kind.__name__}")
 
 
+COUNT = _int(0, 2**62)  # the envelope's run and tick
+STAMP = _num(0.0, 1e12)  # the envelope's wall time, s
 DRIVE = _num(0.0, 100.0)
 ANY_NUMBER = _num(-1e9, 1e9)
 
@@ -455,9 +509,9 @@ def validate(obj: Any, voc: Vocabulary, expect: str | None = None) -> Message:
         raise Rejected(f"schema {schema!r} on a topic that carries {expect!r}")
     if obj.get("version") != VERSION:
         raise Rejected(short(f"{schema} version {obj.get('version')!r} is not {VERSION}"))
-    run = _int(0, 2**62)(obj.get("run"), voc, "run")
-    tick = _int(0, 2**62)(obj.get("tick"), voc, "tick")
-    stamp = _num(0.0, 1e12)(obj.get("stamp"), voc, "stamp")
+    run = COUNT(obj.get("run"), voc, "run")
+    tick = COUNT(obj.get("tick"), voc, "tick")
+    stamp = STAMP(obj.get("stamp"), voc, "stamp")
     body = {k: v for k, v in obj.items() if k not in ENVELOPE and k != AUTH_KEY}
     fields = _fields(body, SCHEMAS[schema], voc, "")
     return Message(schema, run, tick, stamp, fields)
