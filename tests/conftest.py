@@ -77,7 +77,7 @@ def thesis_raw():
 def encode_world(sc, loc, *, presence="present", intention="none", **status):
     """World code with the robot at ``loc``; ``status`` sets ``<object>.status`` (others initial)."""
     values = {"robot.location": loc, "human.presence": presence, "intention": intention}
-    values.update(sc.open["initial_objects"])
+    values.update(sc.open.initial_objects)
     for obj, val in status.items():
         values[f"{obj}.status"] = val
     return sc.encode(values)

@@ -138,7 +138,7 @@ def _valid(sc, code):
 
 
 def test_defaults_keep_the_constraints(thesis, enc):
-    assert thesis.open["invalid_actions"] == "excluded" and thesis.open["always_valid_actions"] == []
+    assert thesis.open.invalid_actions == "excluded" and thesis.open.always_valid_actions == ()
     assert "Rest" not in _valid(thesis, enc(thesis, "H"))
 
 
@@ -183,9 +183,9 @@ def test_bad_new_open_choice_is_one_line_error(override, words):
 # -- the readings of issue 15's second part: time_increase, drive_growth, no_activated_motivation -------
 
 def test_new_readings_default_to_the_old_behaviour(thesis):
-    assert thesis.open["time_increase"] == "after_action"
-    assert thesis.open["drive_growth"] == {}
-    assert thesis.open["no_activated_motivation"] == "argmax"
+    assert thesis.open.time_increase == "after_action"
+    assert thesis.open.drive_growth == {}
+    assert thesis.open.no_activated_motivation == "argmax"
     assert thesis.internal_states == thesis.motivation_names and thesis.none_state == -1
 
 

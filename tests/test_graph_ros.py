@@ -135,7 +135,7 @@ def test_save_reset_and_load_the_q_table_through_the_services(tmp_path):
         t = json.loads(Path(path).read_text())["tables"]
         return [v for o in t.values() for row in o.values() for v in row.values()]
 
-    q0 = load_scenario().open["initial_q"]  # a reset table holds the scenario's initial Q value (issue 15: 15)
+    q0 = load_scenario().open.initial_q  # a reset table holds the scenario's initial Q value (issue 15: 15)
     assert values(q1) == values(q2)  # what was saved came back
     assert any(v != q0 for v in values(q1))
     assert all(v == q0 for v in values(q_empty))

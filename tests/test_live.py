@@ -14,10 +14,12 @@ import sys
 import time
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from homeo_decision import codec
 from homeo_msgs_py.json_schemas import fields, json_schema
-from homeo_msgs_py.schemas import ENVELOPE, SCHEMAS
+from homeo_msgs_py.schemas import ENVELOPE, SCHEMAS, Rejected, validate
 
 
 def test_every_json_schema_has_exactly_the_contracts_fields(thesis):
@@ -25,10 +27,97 @@ def test_every_json_schema_has_exactly_the_contracts_fields(thesis):
     for name, spec in SCHEMAS.items():
         js = json_schema(name, voc)
         assert set(js["properties"]) == set(spec) | set(ENVELOPE), name
+        assert set(js["required"]) - set(ENVELOPE) == {k for k, (_, required) in spec.items() if required}, name
     drives = json_schema("homeo/drives", voc)["properties"]
     assert set(drives["drives"]["properties"]) == set(thesis.drive_names)
     assert drives["m_dom"]["enum"] == list(thesis.motivation_names)
     assert set(fields("homeo/human_input", voc)) == {"intention", "feedback", "proposal"}
+    params = json_schema("homeo/action", voc)["properties"]["params"]["properties"]
+    assert params["xi"] == {"type": "number", "minimum": 0.0, "maximum": 1e6}  # from homeo_msgs_py.learning
+    assert params["pseudo_update"] == {"type": "boolean"}
+
+
+def _conforms(value, schema: dict) -> bool:
+    """``value`` against the JSON Schema keywords json_schemas.py emits (type, enum, const, minimum,
+    maximum, minLength, maxLength, properties, required, additionalProperties)."""
+    types = schema.get("type")
+    if types is not None:
+        kinds = {"number": lambda v: type(v) in (int, float), "integer": lambda v: type(v) is int,
+                 "boolean": lambda v: type(v) is bool, "string": lambda v: type(v) is str,
+                 "object": lambda v: type(v) is dict, "null": lambda v: v is None}
+        if not any(kinds[t](value) for t in ([types] if isinstance(types, str) else types)):
+            return False
+    if "enum" in schema and not any(value == e and type(value) is type(e) or (value is None and e is None)
+                                    for e in schema["enum"]):
+        return False
+    if "const" in schema and value != schema["const"]:
+        return False
+    if type(value) in (int, float) and not (schema.get("minimum", value) <= value <= schema.get("maximum", value)):
+        return False
+    if type(value) is str and not schema.get("minLength", 0) <= len(value) <= schema.get("maxLength", len(value)):
+        return False
+    if type(value) is dict:
+        props = schema.get("properties", {})
+        if any(k not in value for k in schema.get("required", ())):
+            return False
+        extra = schema.get("additionalProperties", True)
+        for k, v in value.items():
+            sub = props.get(k, extra)
+            if sub is False or (isinstance(sub, dict) and not _conforms(v, sub)):
+                return False
+    return True
+
+
+def test_the_checker_of_the_test_refuses_what_a_schema_excludes():
+    s = {"type": "object", "properties": {"a": {"type": "integer", "minimum": 0, "maximum": 3}},
+         "required": ["a"], "additionalProperties": False}
+    assert _conforms({"a": 2}, s)
+    assert not any(_conforms(v, s) for v in ({"a": 4}, {"a": True}, {}, {"a": 1, "b": 0}, [], {"a": 1.5}))
+    assert not _conforms(None, {"enum": ["x"]}) and _conforms(None, {"enum": ["x", None]})
+
+
+@pytest.fixture(scope="module")
+def samples(thesis):
+    from test_decode_boundary import _sample_messages
+
+    return codec.vocabulary(thesis), _sample_messages(thesis)
+
+
+def test_every_real_message_conforms_to_its_json_schema(samples):
+    voc, sent = samples
+    assert sent
+    for key, texts in sent.items():
+        for text in texts:
+            obj = json.loads(text)
+            obj.pop("auth", None)  # the signature is not described
+            assert _conforms(obj, json_schema(obj["schema"], voc)), (key, text)
+
+
+@settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(data=st.data())
+def test_a_message_its_json_schema_refuses_the_contract_refuses_too(samples, data):
+    """The JSON Schemas say no less than the checks they come from: a value the viewer's schema
+    refuses is refused by ``validate`` (what the check knows beyond the schema, such as
+    probabilities summing to 1, may refuse more)."""
+    from test_decode_boundary import JSON
+
+    voc, sent = samples
+    key = data.draw(st.sampled_from(sorted(sent)))
+    obj = json.loads(data.draw(st.sampled_from(sent[key])))
+    obj.pop("auth", None)
+    schema = json_schema(obj["schema"], voc)
+    target = obj
+    path = [data.draw(st.sampled_from(sorted(set(obj) | set(schema["properties"]))))]
+    while isinstance(target.get(path[-1]), dict) and target[path[-1]] and data.draw(st.booleans()):
+        target = target[path[-1]]
+        path.append(data.draw(st.sampled_from(sorted(target))))
+    if data.draw(st.booleans()):
+        target.pop(path[-1], None)
+    else:
+        target[path[-1]] = data.draw(JSON | st.sampled_from([-1, 2, 1e6 + 1, 101.0, "none", None, True]))
+    if not _conforms(obj, schema):
+        with pytest.raises(Rejected):
+            validate(obj, voc, obj.get("schema"))
 
 
 def _free_port() -> int:

@@ -79,7 +79,7 @@ def test_the_overrides_parameter_builds_a_scenario_or_is_refused(items):
 def test_overrides_round_trip_through_the_parameter():
     ov = {"initial_q": 0.5, "always_valid_actions": ["Rest", "Chat"], "serving_growth": "unsatisfied"}
     sc = load_node_scenario("", overrides_param(ov))
-    assert sc.open["initial_q"] == 0.5 and list(sc.open["always_valid_actions"]) == ["Rest", "Chat"]
+    assert sc.open.initial_q == 0.5 and list(sc.open.always_valid_actions) == ["Rest", "Chat"]
     assert overrides_param({}) == [""]
 
 

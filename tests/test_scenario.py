@@ -187,7 +187,7 @@ def test_moves_have_no_drive_effect(thesis, enc):
 
 
 def test_on_leave_effects_when_open_choice_true(thesis, enc):
-    assert thesis.open["on_leave_effects"] is True
+    assert thesis.open.on_leave_effects is True
     code = enc(thesis, "C", charger="charging")
     for move in ("MoveToH", "MoveToR"):
         assert after(thesis, code, move)["charger.status"] == "idle", move

@@ -40,7 +40,9 @@ def expect_error(raw, *words):
 def test_package_reexports_the_split_modules():
     assert scenario_pkg.load_scenario is sc_load.load_scenario
     assert scenario_pkg.scenario_from_dict is sc_load.scenario_from_dict
-    assert scenario_pkg.OPEN_CHOICES is sc_load.OPEN_CHOICES
+    from homeo_decision.scenario import open_choices
+
+    assert scenario_pkg.OpenChoices is open_choices.OpenChoices
     assert scenario_pkg._compile is sc_compile._compile
     for name in ("Scenario", "DriveSpec", "ActionSpec", "IntentionSpec", "ObservationSpec", "Compiled", "ScenarioError",
                  "NONE_INTENTION", "NULL_OBJECT", "RELATIONS", "OBS_CHANNELS", "PRESENCE", "DISTANCES"):
@@ -125,15 +127,15 @@ def test_old_open_choice_names_are_gone(thesis_raw, old):
 
 
 def test_renamed_open_choices_keep_the_thesis_values(thesis):
-    assert thesis.open["serving_growth"] == "unsatisfied"
-    assert thesis.open["on_leave_effects"] is True
-    assert thesis.open["human_proposal_choice"] == "random"
+    assert thesis.open.serving_growth == "unsatisfied"
+    assert thesis.open.on_leave_effects is True
+    assert thesis.open.human_proposal_choice == "random"
 
 
 @pytest.mark.parametrize("value", ["first", "random", "MoveToR", "MoveToC", "LightOn"])
 def test_human_proposal_choice_accepts_first_random_and_action_names(thesis_raw, value):
     thesis_raw["open"]["human_proposal_choice"] = value
-    assert scenario_from_dict(thesis_raw).open["human_proposal_choice"] == value
+    assert scenario_from_dict(thesis_raw).open.human_proposal_choice == value
 
 
 @pytest.mark.parametrize("value", ["MoveToX", "last", 3, True, None])

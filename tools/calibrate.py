@@ -2,7 +2,7 @@
 """Calibration of the open choices of the thesis scenario (see docs/FIDELITY.md).
 
 Every equation of the thesis stays as it is; only the values under ``open`` in
-``src/homeo_decision/scenarios/thesis.json`` (``homeo_decision.scenario.OPEN_CHOICES`` plus the
+``src/homeo_decision/scenarios/thesis.json`` (``homeo_decision.scenario.open_choices`` plus the
 initial state) are searched. The script has three parts:
 
   --joint        the joint search (issue 15): Optuna's TPE over every open choice at once on

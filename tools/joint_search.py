@@ -212,7 +212,7 @@ def _seeds(spec: str) -> list[int]:
 
 
 def current_open() -> dict:
-    return {k: SC.open[k] for k in SEARCHED}
+    return {k: getattr(SC.open, k) for k in SEARCHED}
 
 
 # the hints of a resumed search (issue 15, second part): the new readings one at a time around the default

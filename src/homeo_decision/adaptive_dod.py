@@ -131,8 +131,8 @@ class AdaptiveDoDRobot:
         return self.core.xi
 
     @property
-    def pseudo(self) -> bool:
-        return self.core.pseudo
+    def pseudo_update(self) -> bool:
+        return self.core.pseudo_update
 
     def perceive(self, drives: Sequence[float], code: int) -> Percept:
         return self.core.perceive(drives, code)

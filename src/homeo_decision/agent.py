@@ -11,6 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Sequence
 
+from homeo_msgs_py.learning import DOD, LEARNING, check_learning
+
 from .motivation import dod_weights, motivational_state
 from .objectq import ObjectQ, phase_at, schedule_from
 from .reward import drive_reward, pseudo_drives, reward
@@ -41,7 +43,7 @@ class Perceiving:
 
     def _init_perception(self, sc: Scenario) -> None:
         self.thresholds = [d.threshold for d in sc.drives]
-        self.tie_break = sc.open["tie_break"]
+        self.tie_break = sc.open.tie_break
         self.none_state = sc.none_state
         self.stim = sc.c.stim
         self.valid = sc.c.valid
@@ -64,47 +66,41 @@ class DecisionCore(Perceiving):
 
     def __init__(self, sc: Scenario, seed: int = 0, *, dod: float | None = None, xi: float | None = None,
                  gamma: float | None = None, pseudo_update: bool | None = None, feedback_value: float | None = None,
-                 feedback: bool = True):
+                 feedback: bool | None = None):
         self.sc = sc
-        L = sc.learning
         self._init_perception(sc)
-        self.schedule = schedule_from(L)
+        self.schedule = schedule_from(sc.learning)
         self.q = ObjectQ(sc)
         self.serving = sc.serving
         self.praise = sc.praise_change
-        self.set_params(dod=L["dod"] if dod is None else dod, xi=L["xi"] if xi is None else xi,
-                        gamma=L["gamma"] if gamma is None else gamma,
-                        pseudo_update=L["pseudo_update"] if pseudo_update is None else pseudo_update,
-                        feedback_value=sc.feedback_value if feedback_value is None else feedback_value,
-                        feedback=feedback)
+        given = dict(dod=dod, xi=xi, gamma=gamma, pseudo_update=pseudo_update, feedback=feedback)
+        # the scenario's learning block (its defaults filled from the declaration), then what is given
+        self.set_params(**{s.name: sc.learning[s.name] if given[s.name] is None else given[s.name] for s in LEARNING},
+                        feedback_value=sc.feedback_value if feedback_value is None else feedback_value)
         self._phase_from, self._phase_until, self._phase = 0, -1, self.schedule[0]  # empty: computed at first use
         # ticks learned before this run (a robot that resumes from a checkpoint): the schedule of
         # tick t is the scenario's at t + tick_offset, so it goes on rather than starting again
         self.tick_offset = 0
         self.reseed(seed)
 
-    def set_params(self, *, dod=None, xi=None, gamma=None, pseudo_update=None, feedback_value=None, feedback=None) -> None:
-        """Change tunables between ticks (the node's live parameters). All are checked before any
-        changes, so a refused call leaves the core as it was."""
-        weights = dod_weights(float(dod), len(self.sc.drives), self.serving) if dod is not None else None
-        if xi is not None and not xi >= 0:
-            raise ValueError(f"xi must be >= 0, got {xi}")
-        if gamma is not None and not 0.0 <= gamma <= 1.0:
-            raise ValueError(f"gamma must be in [0, 1], got {gamma}")
+    def set_params(self, *, feedback_value=None, **params) -> None:
+        """Change tunables between ticks (the node's live parameters): the learning parameters by
+        their declared names (``homeo_msgs_py.learning``; None: unchanged) and the feedback value f.
+        All are checked before any changes, so a refused call (ValueError, one line) leaves the core
+        as it was."""
+        new = check_learning({k: v for k, v in params.items() if v is not None})
         if feedback_value is not None and not feedback_value >= 0:
             raise ValueError(f"feedback value must be >= 0, got {feedback_value}")
-        if dod is not None:
-            self.dod, self.weights = float(dod), weights
-        if xi is not None:
-            self.xi = float(xi)
-        if gamma is not None:
-            self.gamma = float(gamma)
-        if pseudo_update is not None:
-            self.pseudo = bool(pseudo_update)
+        if DOD.name in new:
+            self.weights = dod_weights(new[DOD.name], len(self.sc.drives), self.serving)
+        for name, value in new.items():  # the attributes bear the declared names
+            setattr(self, name, value)
         if feedback_value is not None:
             self.f = float(feedback_value)
-        if feedback is not None:
-            self.use_feedback = bool(feedback)
+
+    def params(self) -> dict:
+        """The learning parameters in force, by name, in the declaration's order."""
+        return {s.name: getattr(self, s.name) for s in LEARNING}
 
     def phase(self, t: int):
         """The alpha/tau phase of tick t, cached over the ticks it spans (learning asks for t-1 and
@@ -149,11 +145,11 @@ class DecisionCore(Perceiving):
               p_next: Percept, t: int) -> Learned:
         """Lines 19-24: the Object-Q update (Eq 3.14) and, for a proposal, the pseudo update (Eq 3.23)."""
         alpha = self.phase(t).alpha
-        fb = feedback if self.use_feedback else 0
+        fb = feedback if self.feedback else 0
         r = reward(p.drives, after, self.weights, p.m_dom, self.xi, fb, self.f)
         self.q.update(action, p.states, r, p_next.states, alpha, self.gamma, p.code, p_next.code)
         r_dag = None
-        if self.pseudo and self.use_feedback and proposal is not None and proposal != action:
+        if self.pseudo_update and self.feedback and proposal is not None and proposal != action:
             d_dag = pseudo_drives(p.drives, self.serving, self.praise)
             r_dag = drive_reward(p.drives, d_dag, self.weights, p.m_dom, self.xi)
             # s+ differs from s only in m_dom, from the pseudo drives and unchanged stimuli

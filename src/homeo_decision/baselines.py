@@ -33,6 +33,8 @@ from __future__ import annotations
 
 from typing import Sequence
 
+from homeo_msgs_py.learning import DOD, GAMMA, XI
+
 from .agent import DecisionCore, Learned, Perceiving, Percept
 from .motivation import dod_weights
 from .objectq import phase_at, schedule_from, softmax_pick, softmax_probs
@@ -51,11 +53,11 @@ class _Perceiving(Perceiving):
         self.sc = sc
         self._init_perception(sc)
         self.serving = sc.serving
-        self.dod = float(L["dod"] if dod is None else dod)
-        self.xi = float(L["xi"] if xi is None else xi)
+        self.dod = float(L[DOD.name] if dod is None else dod)
+        self.xi = float(L[XI.name] if xi is None else xi)
         self.weights = dod_weights(self.dod, len(sc.drives), sc.serving)
         self.f = sc.feedback_value
-        self.pseudo = False
+        self.pseudo_update = False
         self.reseed(seed)
 
     def reseed(self, seed: int) -> None:
@@ -141,11 +143,11 @@ class FlatQ(_Perceiving):
                  gamma: float | None = None, feedback_value: float | None = None):
         super().__init__(sc, seed, dod, xi)
         c = sc.c
-        self.gamma = float(sc.learning["gamma"] if gamma is None else gamma)
+        self.gamma = float(sc.learning[GAMMA.name] if gamma is None else gamma)
         if feedback_value is not None:
             self.f = float(feedback_value)
         self.schedule = schedule_from(sc.learning)
-        self.initial_q = float(sc.open["initial_q"])
+        self.initial_q = float(sc.open.initial_q)
         objs = [k for k, o in enumerate(sc.object_names) if o != NULL_OBJECT]
         n_os = [len(c.obj_state_labels[k]) for k in objs]
         n_ext = 1
@@ -161,7 +163,7 @@ class FlatQ(_Perceiving):
                 s = s * n + c.obj_state[code][k]
             base.append(s)
         self.base = base
-        self.max_over_valid = sc.open["value_max_over"] == "valid"
+        self.max_over_valid = sc.open.value_max_over == "valid"
         self.reset()
 
     def reset(self) -> None:

@@ -22,13 +22,16 @@ import math
 import os
 from pathlib import Path
 
+from homeo_msgs_py.learning import LEARNING, SEED
+
 from . import jsonfile, qtable_io
 from .objectq import ObjectQ
 from .rng import UniformStream
 
 SCHEMA = "homeo-checkpoint"
 VERSION = 1
-DECISION_PARAMS = ("dod", "xi", "gamma", "pseudo_update", "feedback", "seed")
+# the decision's params: its learning parameters and its seed, as declared (homeo_msgs_py.learning)
+DECISION_PARAMS = LEARNING + (SEED,)
 
 
 class CheckpointError(ValueError):
@@ -83,7 +86,7 @@ def check_envelope(raw, node: str, where: str) -> dict:
 # -- the world nodes' parts (homeo_sim.checkpoint, pepper_bridge.checkpoint) ----------------------------
 def scenario_print(sc) -> str:
     """The scenario a world checkpoint was written under: a restart must run the same one."""
-    return digest({"raw": sc.raw, "open": sc.open})
+    return digest({"raw": sc.raw, "open": sc.open.as_dict()})
 
 
 def codes_print(sc) -> str:
@@ -155,8 +158,7 @@ def digest(obj) -> str:
 
 # -- the decision node ------------------------------------------------------------------------------
 def decision_checkpoint(core, ticks: int, run: int, session: str = "") -> dict:
-    params = {"dod": core.dod, "xi": core.xi, "gamma": core.gamma, "pseudo_update": core.pseudo,
-              "feedback": core.use_feedback, "seed": core.seed}
+    params = dict(core.params(), **{SEED.name: core.seed})
     return envelope("homeo_decision", ticks, core.tick_offset, run, params, core.rng.state(),
                     qtable_io.to_dict(core.q), session)
 
@@ -181,20 +183,15 @@ def restore_decision(core, ck: dict, where: str = "<memory>", params: bool = Fal
         raise CheckpointError(f"{where}: corrupt checkpoint (rng: {exc})") from None
     p = ck["params"]
     if params:
-        missing = [k for k in DECISION_PARAMS if k not in p]
+        missing = [s.name for s in DECISION_PARAMS if s.name not in p]
         if missing:
             raise CheckpointError(f"{where}: corrupt checkpoint (params lack {', '.join(missing)})")
-        wrong = [k for k in ("dod", "xi", "gamma") if isinstance(p[k], bool) or not isinstance(p[k], (int, float))]
-        wrong += [k for k in ("pseudo_update", "feedback") if not isinstance(p[k], bool)]
-        wrong += [] if isinstance(p["seed"], int) and not isinstance(p["seed"], bool) and p["seed"] >= 0 else ["seed"]
-        if wrong:
-            raise CheckpointError(f"{where}: corrupt checkpoint (params: bad {', '.join(wrong)})")
-        try:  # set_params checks everything before it changes anything
-            core.set_params(dod=p["dod"], xi=p["xi"], gamma=p["gamma"], pseudo_update=p["pseudo_update"],
-                            feedback=p["feedback"])
-        except (TypeError, ValueError) as exc:
+        try:  # each as its declaration takes it; set_params then changes nothing before all are checked
+            values = {s.name: s.check(p[s.name]) for s in DECISION_PARAMS}
+        except ValueError as exc:
             raise CheckpointError(f"{where}: corrupt checkpoint (params: {exc})") from None
-        core.seed = p["seed"]
+        core.set_params(**{s.name: values[s.name] for s in LEARNING})
+        core.seed = values[SEED.name]
     core.q.q = q.q
     core.rng = rng
 

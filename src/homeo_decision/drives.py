@@ -24,12 +24,12 @@ class DriveDynamics:
         self.values = [0.0] * len(sc.drives)
         # the open choice drive_growth: drives of this subset that grow only on some ticks
         names = [d.name for d in sc.drives]
-        self.growth_when = tuple((names.index(n), r) for n, r in sc.open.get("drive_growth", {}).items()
+        self.growth_when = tuple((names.index(n), r) for n, r in sc.open.drive_growth.items()
                                  if names.index(n) in self.idx)
         self.reset()
 
     def reset(self, initial: Sequence[float] | None = None) -> None:
-        init = self.sc.open["initial_drives"] if initial is None else initial
+        init = self.sc.open.initial_drives if initial is None else initial
         for i in self.idx:
             self.values[i] = clamp(float(init[i]))
 
@@ -80,9 +80,9 @@ class DriveModel(DriveDynamics):
         self.serving = sc.serving
         self.serving_internal = sc.drives[sc.serving].source == "internal"
         self.praise = sc.praise_change
-        self.scold = sc.open["scold_drive_change"]
-        self.growth = sc.open["serving_growth"]
-        init = sc.open["initial_drives"]
+        self.scold = sc.open.scold_drive_change
+        self.growth = sc.open.serving_growth
+        init = sc.open.initial_drives
         for i in self.body_idx:
             self.values[i] = clamp(float(init[i]))
 

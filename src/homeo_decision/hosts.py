@@ -42,6 +42,4 @@ class DecisionHost:
         sc, core, d = self.sc, self.core, inputs["drives"]
         perceived, out, after, final = codec.perception_from_fields(sc, d)
         a = self.decision.tick(k, perceived, out, after, final)
-        params = {"dod": core.dod, "xi": core.xi, "gamma": core.gamma, "feedback": core.use_feedback,
-                  "pseudo_update": core.pseudo}
-        return codec.action_fields(sc, a, d, core.phase(k).tau, params, final)
+        return codec.action_fields(sc, a, d, core.phase(k).tau, core.params(), final)

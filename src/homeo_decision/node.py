@@ -6,9 +6,9 @@ Subscribes homeo/drives (state: drives, m_dom, the world they were perceived in,
            outcome of the last tick: executed action, feedback, proposal)
 Services   ~/save_q, ~/load_q (std_srvs/Trigger: the file in q_table_path),
            ~/reset (forget the Q-table and reseed)
-Parameters dod [0, 1] (Eq 3.27), xi >= 0 (Eq 3.20), gamma [0, 1] (Eq 3.14), feedback (use the
-           user's feedback, Eq 3.21), pseudo_update (Eq 3.23), seed, q_table_path,
-           load_on_start; all but the last take effect on the next tick; and the checkpoint
+Parameters the learning parameters of ``homeo_msgs_py.learning`` (dod, xi, gamma, feedback,
+           pseudo_update: docs/GRAPH.md's table; defaults from the scenario's learning block), seed,
+           q_table_path, load_on_start; all but the last take effect on the next tick; and the checkpoint
            parameters of ``durable`` (checkpoint_dir, checkpoint_every, resume_dir, respawned,
            supervised): a checkpoint holds the Q-table, the random stream, the parameters and the
            learned tick count, from which a resumed run's alpha/tau schedule goes on.
@@ -23,11 +23,12 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
+from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from std_srvs.srv import Trigger
 
-from homeo_msgs_py.graph import NODES, SEED_MAX
+from homeo_msgs_py.graph import NODES
 from homeo_msgs_py.data_dir import OutsideDataDir
+from homeo_msgs_py.learning import LEARNING, SEED
 from homeo_msgs_py.node_base import NodeConfigError
 
 from . import checkpoint, durable, qtable_io
@@ -36,31 +37,19 @@ from .hosts import DecisionHost
 from .node_runtime import ScenarioNode, run_scenario_node
 
 DESC = NODES["homeo_decision"]
-
-
-def _float_param(lo: float, hi: float, text: str) -> ParameterDescriptor:
-    return ParameterDescriptor(description=text, floating_point_range=[FloatingPointRange(from_value=lo, to_value=hi)])
+LEARNING_NAMES = frozenset(s.name for s in LEARNING)
 
 
 class DecisionNode(durable.CheckpointedNode, ScenarioNode):
     def __init__(self):
         super().__init__(DESC.name)
-        L = self.sc.learning
-        self.declare_parameter("dod", float(L["dod"]), _float_param(0.0, 1.0, "Degree of Dedication (Eq 3.27)"))
-        self.declare_parameter("xi", float(L["xi"]), _float_param(0.0, 1000.0, "motivation factor xi (Eq 3.20)"))
-        self.declare_parameter("gamma", float(L["gamma"]), _float_param(0.0, 1.0, "discount factor (Eq 3.14)"))
-        self.declare_parameter("feedback", True, ParameterDescriptor(description="learn from the user's feedback"))
-        self.declare_parameter("pseudo_update", bool(L["pseudo_update"]),
-                               ParameterDescriptor(description="learn from the user's proposals (Eq 3.23)"))
-        self.declare_parameter("seed", 0, ParameterDescriptor(
-            description="seed of the decision's random stream (setting it reseeds)",
-            integer_range=[IntegerRange(from_value=0, to_value=SEED_MAX, step=1)]))
+        learning = self.declare_specs(LEARNING, defaults=self.sc.learning)  # the scenario's values by default
+        seed = self.declare_specs((SEED,))[SEED.name]
         self.declare_parameter("q_table_path", "", ParameterDescriptor(description="Q-table file of ~/save_q, ~/load_q"))
         self.declare_fixed("load_on_start", False, ParameterDescriptor(
             description="load q_table_path when the node starts"))
         p = lambda n: self.get_parameter(n).value  # noqa: E731
-        self.core = DecisionCore(self.sc, p("seed"), dod=p("dod"), xi=p("xi"), gamma=p("gamma"),
-                                 pseudo_update=p("pseudo_update"), feedback=p("feedback"))
+        self.core = DecisionCore(self.sc, seed, **learning)
         self.host = DecisionHost(self.sc, self.core)
         try:
             self.q_path = self.data_path(p("q_table_path"), "q_table_path")
@@ -98,16 +87,14 @@ class DecisionNode(durable.CheckpointedNode, ScenarioNode):
                     q_path = self.data_path(prm.value, "q_table_path")
                 except OutsideDataDir as exc:
                     return SetParametersResult(successful=False, reason=str(exc))
-            if prm.name in ("dod", "xi", "gamma"):
+            if prm.name in LEARNING_NAMES:
                 kw[prm.name] = prm.value
-            elif prm.name in ("feedback", "pseudo_update"):
-                kw[prm.name] = prm.value
-        try:
+        try:  # refused: one line, as the declaration says it (the core is left as it was)
             self.core.set_params(**kw)
         except ValueError as exc:
             return SetParametersResult(successful=False, reason=str(exc))
         for prm in params:
-            if prm.name == "seed":
+            if prm.name == SEED.name:
                 self.core.reseed(prm.value)
         self.q_path = q_path
         return SetParametersResult(successful=True)
@@ -128,10 +115,7 @@ class DecisionNode(durable.CheckpointedNode, ScenarioNode):
         if respawned:  # the node's parameters show what the core uses
             from rclpy.parameter import Parameter
 
-            c = self.core
-            self.set_parameters([Parameter(n, value=v) for n, v in (
-                ("dod", c.dod), ("xi", c.xi), ("gamma", c.gamma), ("feedback", c.use_feedback),
-                ("pseudo_update", c.pseudo))])
+            self.set_parameters([Parameter(n, value=v) for n, v in self.core.params().items()])
         self.get_logger().info(
             f"{'rejoined' if respawned else 'resumed'} from {where}: ticks {ck['ticks']}, tick offset "
             f"{self.core.tick_offset}, learned state {checkpoint.digest(checkpoint.decision_learned(self.core))}")
@@ -170,8 +154,7 @@ class DecisionNode(durable.CheckpointedNode, ScenarioNode):
             return response
         c = self.core
         try:
-            qtable_io.save(c.q, self.q_path, meta={"node": self.get_name(), "dod": c.dod, "xi": c.xi,
-                                                   "pseudo_update": c.pseudo, "seed": c.seed})
+            qtable_io.save(c.q, self.q_path, meta={"node": self.get_name(), **c.params(), SEED.name: c.seed})
         except qtable_io.QTableError as exc:  # a directory, a read-only place, a full disk
             response.success, response.message = False, str(exc)
             return response

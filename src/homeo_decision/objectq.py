@@ -63,7 +63,7 @@ class ObjectQ:
     def __init__(self, sc: Scenario, initial_q: float | None = None):
         c = sc.c
         self.sc = sc
-        self.initial_q = float(sc.open["initial_q"] if initial_q is None else initial_q)
+        self.initial_q = float(sc.open.initial_q if initial_q is None else initial_q)
         self.n_obj = len(sc.object_names)
         self.n_motiv = len(sc.internal_states)  # m_dom's values (Eq 3.6)
         self.n_hum = c.n_hum
@@ -77,7 +77,7 @@ class ObjectQ:
         # per world code: (object, local index) of each valid action, in order (the softmax's hot path)
         self._valid_pairs = [tuple((c.act_obj[a], c.act_local[a]) for a in v) for v in c.valid]
         self._valid = c.valid
-        self.max_over_valid = sc.open["value_max_over"] == "valid"
+        self.max_over_valid = sc.open.value_max_over == "valid"
         self.others = tuple(tuple(m for m in range(self.n_obj) if m != o) for o in range(self.n_obj))
         # every reduced-state tuple, precomputed: states() is on the per-tick path
         self._states = [[tuple(m * self.stride[o] + b[o] for o in range(self.n_obj)) for b in self.base]

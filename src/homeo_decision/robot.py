@@ -74,13 +74,13 @@ class Perception:
     def __init__(self, sc: Scenario):
         self.sc = sc
         self.thresholds = [d.threshold for d in sc.drives]
-        self.tie_break = sc.open["tie_break"]
+        self.tie_break = sc.open.tie_break
         self.none_state = sc.none_state
         self.stim = sc.c.stim
         self.with_intention = sc.c.with_intention
         # the drives right after the action are needed by these two open choices only
-        self.keep_after = sc.open["reward_span"] == "action" or sc.open["metrics_sample"] == "after_action"
-        self.time_first = sc.open["time_increase"] == "before_action"
+        self.keep_after = sc.open.reward_span == "action" or sc.open.metrics_sample == "after_action"
+        self.time_first = sc.open.time_increase == "before_action"
         self.restart()
 
     def restart(self, initial=None) -> None:
@@ -130,7 +130,7 @@ class Decision:
 
     def __init__(self, policy):
         self.policy = policy
-        self.span_action = policy.sc.open["reward_span"] == "action"
+        self.span_action = policy.sc.open.reward_span == "action"
         self.prev: Percept | None = None
         self.learned: Learned | None = None  # what the last learning step computed (for traces)
 

@@ -50,8 +50,8 @@ class IntentionModel:
         self.coder = ObservationCoder(sc)  # raises ScenarioError without an observations block
         self.names = sc.intention_names
         self.K = len(self.names)
-        self.threshold = float(sc.open["intention_threshold"] if threshold is None else threshold)
-        self.strength = float(sc.open["intention_prior_strength"] if prior_strength is None else prior_strength)
+        self.threshold = float(sc.open.intention_threshold if threshold is None else threshold)
+        self.strength = float(sc.open.intention_prior_strength if prior_strength is None else prior_strength)
         if not 0.0 <= self.threshold <= 1.0:
             raise ValueError(f"threshold must be in [0, 1], got {self.threshold}")
         if not self.strength >= 0.0:

@@ -27,6 +27,7 @@ from homeo_decision import qtable_io
 from homeo_decision.agent import DecisionCore
 from homeo_decision.robot import OracleRecognition, Robot, run_loop
 from homeo_decision.scenario import Scenario, load_scenario
+from homeo_msgs_py.learning import DOD
 from pepper_bridge.bridge import PepperBridge
 from pepper_bridge.config import LinkSettings, PepperConfig, load_config
 from pepper_bridge.environment import PepperEnvironment
@@ -39,8 +40,7 @@ TRAIN_ITERATIONS = 5000
 
 def initial_drives(sc: Scenario, given: dict | None) -> list[float]:
     """The scenario's initial drives, with the script's ``robot.drives`` over them."""
-    init = sc.open["initial_drives"]
-    init = dict(init) if isinstance(init, dict) else dict(zip(sc.drive_names, init))
+    init = dict(zip(sc.drive_names, sc.open.initial_drives))
     init.update(given or {})
     return [float(init[n]) for n in sc.drive_names]
 
@@ -77,7 +77,7 @@ class FieldResult:
             wanted[r["item"]] = wanted.get(r["item"], False) or bool(r["satisfied"])
         acts = [r["action"] for r in self.log]
         first = lambda names: next((r["interaction"] for r in self.log if r["action"] in names), None)  # noqa: E731
-        return {"label": self.label, "dod": self.dod, "seed": self.seed, "interactions": len(self.log),
+        return {"label": self.label, DOD.name: self.dod, "seed": self.seed, "interactions": len(self.log),
                 "intentions": len(wanted), "satisfied": sum(wanted.values()),
                 "hsr": (sum(r["satisfied"] for r in judged) / len(judged)) if judged else None,
                 "first_attach": first(self.roles.get("plug", ())),

@@ -15,23 +15,29 @@ actions at tick k's temperature (Eq 3.17). It is scored on what the robot chose 
 
 from __future__ import annotations
 
+from homeo_msgs_py.learning import DOD, XI
+
 from .bag import BagError, RecordedRun
 
+# the learning parameters the evaluation takes (homeo-replay's flags): the reward's (Eq 3.18-3.20)
+POLICY_LEARNING = (DOD, XI)
 
-def evaluate(run: RecordedRun, q_table: str, dod: float | None = None) -> dict:
+
+def evaluate(run: RecordedRun, q_table: str, learning: dict | None = None) -> dict:
+    """``learning``: values of ``POLICY_LEARNING`` by name (the rest: the recorded scenario's)."""
     from homeo_decision import codec
     from homeo_decision.agent import DecisionCore
     from homeo_decision.qtable_io import load
     from homeo_decision.reward import reward
 
     sc = run.sc
-    core = DecisionCore(sc, 0, dod=dod)
+    core = DecisionCore(sc, 0, **(learning or {}))
     load(core.q, q_table)
     acts = sc.action_names
     drives = run.by_tick("drives")
     drives_final = run.by_tick("drives", final=True)
     actions = run.by_tick("action")
-    span_action = sc.open["reward_span"] == "action"
+    span_action = sc.open.reward_span == "action"
     n = agree = 0
     p_sum = w_sum = wr_sum = r_sum = 0.0
     n_r = 0
@@ -64,13 +70,13 @@ def evaluate(run: RecordedRun, q_table: str, dod: float | None = None) -> dict:
         raise BagError(f"{run.path}: no recorded choice to compare with")
     return {"ticks": n, "agreement": agree / n, "p_robot_choice": p_sum / n, "rewarded_ticks": n_r,
             "expected_reward": wr_sum / w_sum if w_sum else None, "recorded_reward": r_sum / n_r if n_r else None,
-            "dod": core.dod, "q_table": q_table}
+            **{s.name: getattr(core, s.name) for s in POLICY_LEARNING}, "q_table": q_table}
 
 
 def format_eval(res: dict) -> str:
     f = lambda v: "n/a" if v is None else f"{v:.4f}"  # noqa: E731
     return "\n".join([
-        f"policy {res['q_table']} (DoD {res['dod']:g}) on {res['ticks']} recorded choices:",
+        f"policy {res['q_table']} (DoD {res[DOD.name]:g}, xi {res[XI.name]:g}) on {res['ticks']} recorded choices:",
         f"  chooses the robot's action (most likely)  : {res['agreement']:.1%}",
         f"  mean probability of the robot's action    : {res['p_robot_choice']:.4f}",
         f"  expected reward on the record (Eq 3.18)   : {f(res['expected_reward'])}  "

@@ -1,7 +1,7 @@
 """``homeo-replay``: a recorded run (``homeo-launch sim --record DIR``) from its bag alone.
 
     homeo-replay DIR [--json] [--log] [--plots DIR]
-    homeo-replay DIR --policy Q_TABLE [--dod X] [--json]
+    homeo-replay DIR --policy Q_TABLE [--dod X] [--xi X] [--json]
 
 ``--json`` prints exactly what the run's ``--json`` printed (the final run status carries the
 metrics); without it, the metrics table and a summary of the interaction. ``--log`` adds the
@@ -19,9 +19,11 @@ import os
 import sys
 from pathlib import Path
 
-from homeo_msgs_py.cli_args import Parser, UserError, float_in, run_command
+from homeo_msgs_py.cli_args import Parser, UserError, run_command
+from homeo_msgs_py.learning import BY_NAME, add_learning_flags, learning_values
 
 from .bag import BagError, RecordedRun, load_run
+from .policy_eval import POLICY_LEARNING
 
 PROG = "homeo-replay"
 
@@ -61,7 +63,7 @@ def series(run: RecordedRun):
     from homeo_sim.metrics import cumulative_series
 
     sc = run.sc
-    key = "after_action" if sc.open["metrics_sample"] == "after_action" else "drives"
+    key = "after_action" if sc.open.metrics_sample == "after_action" else "drives"
     acts = run.by_tick("action")
     acts.update(run.by_tick("action", final=True))
     outs = run.by_tick("outcome")
@@ -118,13 +120,14 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--log", action="store_true", help="print the interaction, one line per tick")
     ap.add_argument("--plots", metavar="DIR", help="draw drives, CDA/CEDA and HSR/RSR over time here")
     ap.add_argument("--policy", metavar="Q_TABLE", help="judge this Q-table on the recorded perceptions")
-    ap.add_argument("--dod", type=float_in(0.0, 1.0), default=None, help="Degree of Dedication for --policy")
+    add_learning_flags(ap, POLICY_LEARNING, help_extra=" for --policy (default: the recorded scenario's)")
     return ap
 
 
 def run_cli(a) -> int:
-    if a.dod is not None and not a.policy:
-        raise UserError("--dod needs --policy")
+    given = learning_values(a, POLICY_LEARNING)
+    if given and not a.policy:
+        raise UserError(f"{BY_NAME[next(iter(given))].flag} needs --policy")
     if a.json and a.log:
         raise UserError("--log prints text: use it without --json")
     if a.plots and Path(a.plots).exists() and not Path(a.plots).is_dir():
@@ -135,7 +138,7 @@ def run_cli(a) -> int:
     if a.policy:
         from .policy_eval import evaluate, format_eval
 
-        res = evaluate(run, a.policy, a.dod)
+        res = evaluate(run, a.policy, given)
         print(json.dumps(res) if a.json else format_eval(res))
         return 0
     from homeo_sim.cli import format_table

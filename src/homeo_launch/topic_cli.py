@@ -23,7 +23,7 @@ import sys
 import time
 
 from homeo_decision.codec import vocabulary
-from homeo_msgs_py.cli_args import Parser, UserError
+from homeo_msgs_py.cli_args import Parser, UserError, setting
 from homeo_msgs_py.graph import DIAGNOSTICS, TOPICS, key_of
 from homeo_msgs_py.schemas import SCHEMAS, VERSION, Rejected, Vocabulary, decode, validate
 
@@ -40,16 +40,8 @@ def _key(topic: str) -> str:
 def _vocabulary(args) -> Vocabulary:
     from homeo_decision.scenario import load_scenario
 
-    overrides = {}
-    for s in args.set:
-        if "=" not in s:
-            raise UserError(f"--set {s!r} is not KEY=VALUE")
-        k, v = s.split("=", 1)
-        try:
-            overrides[k] = json.loads(v)
-        except json.JSONDecodeError:
-            overrides[k] = v
-    return vocabulary(load_scenario(args.scenario, overrides=overrides))
+    # --set parsed as every command parses it (cli_args.setting); the scenario validates the values
+    return vocabulary(load_scenario(args.scenario, overrides=dict(args.set)))
 
 
 class _Ros:
@@ -266,7 +258,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     def scen(p):
         p.add_argument("--scenario", metavar="FILE", default=None, help="scenario JSON (default: the thesis)")
-        p.add_argument("--set", metavar="KEY=VALUE", action="append", default=[], help="open-choice override")
+        p.add_argument("--set", metavar="KEY=VALUE", type=setting, action="append", default=[],
+                       help="open-choice override")
 
     ls = sub.add_parser("list", help="nodes and topics with their writers and readers")
     ls.add_argument("--wait", type=float, default=3.0, help="seconds of discovery before listing (default 3)")

@@ -156,13 +156,18 @@ class HomeoNode(Node):
         self._fixed[name] = value
         return value
 
-    def declare_specs(self, specs) -> dict:
+    def declare_specs(self, specs, defaults: dict | None = None) -> dict:
         """Declare parameters from their declarations (``homeo_msgs_py.params.ParamSpec``): the
-        descriptor carries the doc and the range, a ``fixed`` one is set at start only. Returns
-        their values; a value the declaration refuses is a NodeConfigError (one line)."""
+        descriptor carries the doc and the range, a ``fixed`` one is set at start only. ``defaults``
+        (by name) replace the declared defaults (a scenario's values). Returns their values; a value
+        the declaration refuses is a NodeConfigError (one line)."""
         values = {}
         for s in specs:
-            default = list(s.default) if isinstance(s.default, tuple) else s.default
+            try:  # as the declared type: a scenario's integer 1 for a float parameter declares a float
+                default = s.check((defaults or {}).get(s.name, s.default))
+            except ValueError as exc:
+                raise NodeConfigError(f"parameter {exc}") from None
+            default = list(default) if isinstance(default, tuple) else default
             declare = self.declare_fixed if s.fixed else self.declare_parameter
             value = declare(s.name, default, descriptor(s))
             value = value.value if hasattr(value, "value") else value

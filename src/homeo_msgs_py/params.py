@@ -98,7 +98,7 @@ def _type_name(t: type) -> str:
 
 
 def _shown(value) -> str:
-    from .schemas import one_line
+    from .text import one_line
 
     text = repr(value)
     return one_line(text if len(text) <= 40 else text[:37] + "...")

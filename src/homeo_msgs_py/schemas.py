@@ -23,6 +23,9 @@ import time
 from dataclasses import dataclass
 from typing import Any, Callable
 
+from .learning import LEARNING
+from .text import one_line  # noqa: F401  (imported from here by many modules)
+
 VERSION = 1
 ENVELOPE = ("schema", "version", "run", "tick", "stamp")
 AUTH_KEY = "auth"  # the graph's signature, appended last (``auth.py``); not part of the fields
@@ -54,10 +57,28 @@ class Message:
 
 
 # -- value checks -------------------------------------------------------------
+# A check takes (value, vocabulary, where) and returns the value kept or raises Rejected. Each also
+# carries ``check.json(voc)``: the JSON Schema of the values it accepts (``json_schemas.py`` walks
+# SCHEMAS with it, for viewers such as Foxglove). What a schema cannot say (probabilities that sum
+# to 1) only the check knows; a value the check accepts the schema accepts too.
 Check = Callable[[Any, "Vocabulary", str], Any]
 
 
+def _schema(of: Callable[["Vocabulary"], dict]):
+    """Attach ``of`` (vocabulary -> JSON Schema) to a check as its ``json``: a function attribute
+    costs the decode nothing."""
+    def attach(check):
+        check.json = of
+        return check
+    return attach
+
+
+def _bounds(lo: float, hi: float) -> dict:
+    return {k: x for k, x in (("minimum", lo), ("maximum", hi)) if math.isfinite(x)}
+
+
 def _num(lo: float, hi: float) -> Check:
+    @_schema(lambda voc: {"type": "number", **_bounds(lo, hi)})
     def check(v, voc, where):
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             raise Rejected(f"{where} must be a number, got {type(v).__name__}")
@@ -68,6 +89,7 @@ def _num(lo: float, hi: float) -> Check:
 
 
 def _int(lo: int, hi: int) -> Check:
+    @_schema(lambda voc: {"type": "integer", "minimum": lo, "maximum": hi})
     def check(v, voc, where):
         if isinstance(v, bool) or not isinstance(v, int):
             raise Rejected(f"{where} must be an integer, got {type(v).__name__}")
@@ -77,12 +99,14 @@ def _int(lo: int, hi: int) -> Check:
     return check
 
 
+@_schema(lambda voc: {"type": "boolean"})
 def _bool(v, voc, where):
     if not isinstance(v, bool):
         raise Rejected(f"{where} must be true or false, got {type(v).__name__}")
     return v
 
 
+@_schema(lambda voc: {"type": "string"})
 def _str(v, voc, where):
     if not isinstance(v, str):
         raise Rejected(f"{where} must be a string, got {type(v).__name__}")
@@ -91,6 +115,7 @@ def _str(v, voc, where):
 
 def _one_of(kind: str, nullable: bool = False) -> Check:
     """A name from the scenario vocabulary ``kind`` (actions, intentions, ...)."""
+    @_schema(lambda voc: {"enum": voc.names(kind) + [None]} if nullable else {"type": "string", "enum": list(voc.names(kind))})
     def check(v, voc, where):
         if v is None and nullable:
             return None
@@ -101,6 +126,7 @@ def _one_of(kind: str, nullable: bool = False) -> Check:
     return check
 
 
+@_schema(lambda voc: {"enum": [-1, 0, 1]})
 def _feedback(v, voc, where):
     if isinstance(v, bool) or v not in (-1, 0, 1):
         raise Rejected(f"{where} must be +1, -1 or 0, got {v!r}")
@@ -109,6 +135,13 @@ def _feedback(v, voc, where):
 
 def _map(key_kind: str, value: Check, complete: bool = False, extra: Check | None = None) -> Check:
     """A JSON object keyed by names of ``key_kind``; ``extra`` admits other keys (e.g. raw readings)."""
+    def schema(voc):
+        names = voc.names(key_kind)
+        out = {"type": "object", "properties": {n: value.json(voc) for n in names},
+               "additionalProperties": extra.json(voc) if extra is not None else False}
+        return out | ({"required": list(names)} if complete else {})
+
+    @_schema(schema)
     def check(v, voc, where):
         if not isinstance(v, dict):
             raise Rejected(f"{where} must be an object, got {type(v).__name__}")
@@ -129,8 +162,15 @@ def _map(key_kind: str, value: Check, complete: bool = False, extra: Check | Non
     return check
 
 
+def object_schema(spec: dict[str, tuple[Check, bool]], voc: "Vocabulary") -> dict:
+    """The JSON Schema of an object of named fields (a payload, a nested object)."""
+    return {"type": "object", "properties": {k: c.json(voc) for k, (c, _) in spec.items()},
+            "required": [k for k, (_, required) in spec.items() if required], "additionalProperties": False}
+
+
 def _obj(spec: dict[str, tuple[Check, bool]]) -> Check:
     """A nested object with named fields; ``(check, required)`` per field; no unknown keys."""
+    @_schema(lambda voc: object_schema(spec, voc))
     def check(v, voc, where):
         if not isinstance(v, dict):
             raise Rejected(f"{where} must be an object, got {type(v).__name__}")
@@ -150,6 +190,15 @@ def _fields(v: dict, spec, voc, where: str) -> dict:
     return out
 
 
+def _objects_schema(voc: "Vocabulary") -> dict:
+    objects = voc.object_vars
+    return {"type": "object", "additionalProperties": False, "required": list(objects), "properties": {
+        o: {"type": "object", "additionalProperties": False, "required": list(vars_),
+            "properties": {var: {"enum": list(values)} for var, values in vars_.items()}}
+        for o, vars_ in objects.items()}}
+
+
+@_schema(_objects_schema)
 def _objects(v, voc, where):
     """``{"charger": {"status": "idle"}, ...}``: every scenario object with every variable."""
     if not isinstance(v, dict):
@@ -178,6 +227,14 @@ _HUMAN_FIELDS = _obj({"presence": (_one_of("presences"), True), "relation": (_on
 _ABSENT = "absent"  # the one value presence and relation share: each is absent iff the other is
 
 
+def _human_json(voc) -> dict:
+    """Presence and relation, and their agreement: both absent, or neither."""
+    both = {k: {"const": _ABSENT} for k in ("presence", "relation")}
+    neither = {k: {"not": {"const": _ABSENT}} for k in ("presence", "relation")}
+    return dict(_HUMAN_FIELDS.json(voc), oneOf=[{"properties": both}, {"properties": neither}])
+
+
+@_schema(_human_json)
 def _human(v, voc, where):
     """The human of a world: presence and relation, which must agree (absent iff absent)."""
     out = _HUMAN_FIELDS(v, voc, where)
@@ -186,6 +243,7 @@ def _human(v, voc, where):
     return out
 
 
+@_schema(lambda voc: {"type": ["string", "null"], "minLength": 1, "maxLength": 64})
 def _symbol(v, voc, where):
     if v is not None and (not isinstance(v, str) or not v or len(v) > 64):
         raise Rejected(f"{where} must be a short symbol or null, got {v!r}")
@@ -193,8 +251,11 @@ def _symbol(v, voc, where):
 
 
 def _prob_map(kind: str) -> Check:
+    probabilities = _map(kind, _num(0.0, 1.0))
+
+    @_schema(probabilities.json)  # that they sum to 1 only the check says
     def check(v, voc, where):
-        out = _map(kind, _num(0.0, 1.0))(v, voc, where)
+        out = probabilities(v, voc, where)
         s = sum(out.values())
         if out and abs(s - 1.0) > 1e-6:
             raise Rejected(f"{where}: probabilities sum to {s:.6f}, not 1")
@@ -205,6 +266,7 @@ def _prob_map(kind: str) -> Check:
 PRAISE_SCOLD = {"praise": 1, "scold": -1}
 
 
+@_schema(lambda voc: {"enum": list(PRAISE_SCOLD) + [None, -1, 0, 1]})
 def _praise_scold(v, voc, where):
     """A person's answer: "praise" or "scold" (or +1 / -1), null or 0 for none; kept as +1/-1/0."""
     if v is None:
@@ -216,10 +278,23 @@ def _praise_scold(v, voc, where):
     raise Rejected(f"{where} must be \"praise\", \"scold\" or null, got {v!r}")
 
 
+@_schema(lambda voc: {})
 def _any_json(v, voc, where):
     return v
 
 
+def _param(spec) -> Check:
+    """A parameter's value as its declaration (``params.ParamSpec``) takes it: a number in its range,
+    a truth value."""
+    if spec.kind is float:
+        return _num(-math.inf if spec.lo is None else spec.lo, math.inf if spec.hi is None else spec.hi)
+    if spec.kind is bool:
+        return _bool
+    raise TypeError(f"parameter {spec.name}: no message check for {spec.kind.__name__}")
+
+
+COUNT = _int(0, 2**62)  # the envelope's run and tick
+STAMP = _num(0.0, 1e12)  # the envelope's wall time, s
 DRIVE = _num(0.0, 100.0)
 ANY_NUMBER = _num(-1e9, 1e9)
 
@@ -268,9 +343,8 @@ SCHEMAS: dict[str, dict[str, tuple[Check, bool]]] = {
         "action": (_one_of("actions", nullable=True), True),
         "m_dom": (_one_of("internal_states"), False),
         "tau": (_num(0.0, 1e6), False),
-        "params": (_obj({"dod": (_num(0.0, 1.0), True), "xi": (_num(0.0, 1e6), True),
-                         "gamma": (_num(0.0, 1.0), True), "feedback": (_bool, True),
-                         "pseudo_update": (_bool, True)}), False),
+        # the learning parameters in force, as declared (homeo_msgs_py.learning)
+        "params": (_obj({spec.name: (_param(spec), True) for spec in LEARNING}), False),
         "drives": (_map("drives", DRIVE, complete=True), False),  # the drives the choice was made with
         "intention": (_one_of("intentions"), False),  # the recognised intention it was made for
         "after_action": (_map("drives", DRIVE, complete=True), False),
@@ -352,12 +426,6 @@ def finite(obj):
     if isinstance(obj, (list, tuple)):
         return [finite(v) for v in obj]
     return obj
-
-
-def one_line(text: str) -> str:
-    """``text`` as a reason shows a value someone else chose: on one line, control characters
-    (line breaks among them) escaped."""
-    return text if text.isprintable() else "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 def short(text: str, limit: int = MAX_REASON) -> str:
@@ -466,9 +534,9 @@ def validate(obj: Any, voc: Vocabulary, expect: str | None = None) -> Message:
         raise Rejected(f"schema {schema!r} on a topic that carries {expect!r}")
     if obj.get("version") != VERSION:
         raise Rejected(short(f"{schema} version {obj.get('version')!r} is not {VERSION}"))
-    run = _int(0, 2**62)(obj.get("run"), voc, "run")
-    tick = _int(0, 2**62)(obj.get("tick"), voc, "tick")
-    stamp = _num(0.0, 1e12)(obj.get("stamp"), voc, "stamp")
+    run = COUNT(obj.get("run"), voc, "run")
+    tick = COUNT(obj.get("tick"), voc, "tick")
+    stamp = STAMP(obj.get("stamp"), voc, "stamp")
     body = {k: v for k, v in obj.items() if k not in ENVELOPE and k != AUTH_KEY}
     fields = _fields(body, SCHEMAS[schema], voc, "")
     return Message(schema, run, tick, stamp, fields)

@@ -1,6 +1,7 @@
 """``homeo-sim``: the in-process thesis simulation, its metrics, and its benchmark.
 
-    homeo-sim run [--iterations N] [--seed S | --seeds K [--first-seed N]] [--dod X] [--xi X] [--no-pseudo]
+    homeo-sim run [--iterations N] [--seed S | --seeds K [--first-seed N]] [--dod X] [--xi X]
+                  [--pseudo-update BOOL | --no-pseudo]
                   [--policy {objectq,random,rule,flatq,nofeedback}] [--adaptive-dod]
                   [--scenario FILE] [--set KEY=VALUE ...] [--save-q FILE] [--load-q FILE]
                   [--trace FILE] [--json] [--workers W] [--quiet]
@@ -27,10 +28,12 @@ from homeo_decision.scenario import ScenarioError
 
 from homeo_decision.baselines import POLICIES
 
-from homeo_msgs_py.cli_args import Parser, UserError, float_in, int_at_least, run_command, setting
+from homeo_decision.scenario.reference import DOD_SWEEP, PSEUDO_SWEEP, SWEEP_NAMES, XI_SWEEP
+from homeo_msgs_py.cli_args import Parser, UserError, int_at_least, run_command, setting
 from homeo_msgs_py.graph import BAYES, INTENTION_MODES, ORACLE
+from homeo_msgs_py.learning import add_learning_flags, add_no_pseudo_flag, learning_values
 
-from .runner import RunConfig, build_scenario, run_episode, run_seeds
+from .runner import RUN_LEARNING, RunConfig, build_scenario, run_episode, run_seeds
 from .stats import aggregate, describe, json_safe
 
 PROG = "homeo-sim"
@@ -42,9 +45,8 @@ def add_run_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--seed", type=int_at_least(0), default=None, help="one run with this seed (default 0)")
     g.add_argument("--seeds", type=int_at_least(1), default=None, help="runs with seeds 0..K-1 on all cores")
     add_first_seed(p)
-    p.add_argument("--dod", type=float_in(0.0, 1.0), default=None, help="Degree of Dedication in [0, 1] (Eq 3.27)")
-    p.add_argument("--xi", type=float_in(0.0, 1e6), default=None, help="motivation factor xi >= 0 (Eq 3.20)")
-    p.add_argument("--no-pseudo", action="store_true", help="switch off pseudo updates (Eq 3.23)")
+    add_learning_flags(p, RUN_LEARNING, help_extra=" (default: the scenario's)")
+    add_no_pseudo_flag(p)
     add_common_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
 
@@ -87,7 +89,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="bayes: save the learned intention model (with --seeds: FILE per seed)")
     run.add_argument("--load-intention", metavar="FILE", help="bayes: start from a saved intention model")
     sw = sub.add_parser("sweep", help="sweep xi (Fig 4.3), DoD (Fig 4.5) or the pseudo update (Fig 4.4)")
-    sw.add_argument("param", choices=("xi", "dod", "pseudo"), help="the parameter to sweep")
+    sw.add_argument("param", choices=SWEEP_NAMES, help="the parameter to sweep")
     sw.add_argument("--seeds", type=int_at_least(1), default=10, help="seeds 0..K-1 per point (default 10)")
     add_first_seed(sw)
     sw.add_argument("--iterations", type=int_at_least(1), default=5000, help="iterations per run (default 5000)")
@@ -115,8 +117,8 @@ def config_from_args(args) -> tuple[RunConfig, list[int]]:
         raise UserError("--first-seed goes with --seeds K (seeds N..N+K-1); for one run use --seed alone")
     seeds = seed_range(first, args.seeds) if args.seeds else [args.seed if args.seed is not None else first]
     cfg = RunConfig(
-        iterations=args.iterations, seed=seeds[0], dod=args.dod, xi=args.xi,
-        pseudo_update=False if args.no_pseudo else None, scenario=args.scenario, overrides=tuple(args.set),
+        iterations=args.iterations, seed=seeds[0], **learning_values(args, RUN_LEARNING),
+        scenario=args.scenario, overrides=tuple(args.set),
         load_q=getattr(args, "load_q", None), save_q=getattr(args, "save_q", None), trace=getattr(args, "trace", None),
         policy=getattr(args, "policy", "objectq"), adaptive_dod=getattr(args, "adaptive_dod", False),
         intention=getattr(args, "intention", ORACLE), load_intention=getattr(args, "load_intention", None),
@@ -244,15 +246,15 @@ def cmd_sweep(args) -> int:
     out_dir = _out_dir(args.out) if args.out else None
     seeds = seed_range(args.first_seed, args.seeds)
     out, raw = sweep(args.param, base, seeds, args.workers, quiet=args.quiet,
-                     curves=out_dir is not None and args.param == "pseudo")
+                     curves=out_dir is not None and args.param == PSEUDO_SWEEP)
     if out_dir is not None:
         from . import report
 
         (out_dir / f"sweep-{args.param}.json").write_text(json.dumps(json_safe(out)))
         st = sc.reference.statements if sc.reference is not None else None  # published values to draw, if any
-        if args.param == "xi":
+        if args.param == XI_SWEEP:
             report.fig_xi(out_dir / "fig4_3_xi.png", out["points"], st)
-        elif args.param == "dod":
+        elif args.param == DOD_SWEEP:
             report.fig_dod(out_dir / "fig4_5_dod.png", out["points"], sc.drive_names, st)
         else:
             other = st["pseudo_unaffected_drive"] if st else None

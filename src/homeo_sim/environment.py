@@ -35,8 +35,8 @@ class SimEnvironment:
         self._unseen = [w[0] for w in sc.c.with_intention]  # the world code with the intention `none`
         # report the body right after the action (in-process only these two open choices need it)
         self.keep_after = body_after if body_after is not None else (
-            sc.open["reward_span"] == "action" or sc.open["metrics_sample"] == "after_action")
-        self.time_first = sc.open["time_increase"] == "before_action"
+            sc.open.reward_span == "action" or sc.open.metrics_sample == "after_action")
+        self.time_first = sc.open.time_increase == "before_action"
         self._start(seed)
 
     @property

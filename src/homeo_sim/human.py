@@ -25,16 +25,16 @@ class SimHuman:
     def __init__(self, sc: Scenario, seed: int = 0):
         self.sc = sc
         o = sc.open
-        self.p_none = o["human_no_intention_prob"]
-        self.p_leave = o["human_leave_prob"]
-        self.p_return = o["human_return_prob"]
-        self.p_propose = o["human_proposal_prob"]
-        self.proposal_choice = o["human_proposal_choice"]  # which desired action a proposal names
+        self.p_none = o.human_no_intention_prob
+        self.p_leave = o.human_leave_prob
+        self.p_return = o.human_return_prob
+        self.p_propose = o.human_proposal_prob
+        self.proposal_choice = o.human_proposal_choice  # which desired action a proposal names
         self.desired = sc.c.desired
         self.desired_order = [()] + [tuple(sc.c.action_ids[a] for a in it.desired) for it in sc.intentions]
         self.reasonable = sc.c.reasonable
         self.with_presence = sc.c.with_presence
-        self.reveal = o["intention_reveal"]
+        self.reveal = o.intention_reveal
         self._habits = _habit_tables(sc)
         self.reset(seed)
 
@@ -162,5 +162,5 @@ def _habit_tables(sc: Scenario):
                 acc += p
                 c.append(acc)
             cum.append(c)
-        out.append((ch, spec.alphabets[ch], sc.open[f"{ch}_noise"], cum))
+        out.append((ch, spec.alphabets[ch], getattr(sc.open, f"{ch}_noise"), cum))
     return tuple(out)

@@ -19,15 +19,21 @@ from homeo_decision import qtable_io
 from homeo_decision.robot import Robot, run_loop
 from homeo_decision.scenario import Scenario, load_scenario
 from homeo_msgs_py.graph import BAYES, ORACLE
+from homeo_msgs_py.learning import DOD, PSEUDO_UPDATE, XI
 
 from .environment import SimEnvironment
 from .metrics import MetricRecorder, accuracy_ends
+
+
+# the learning parameters a run takes (homeo-sim run's flags): RunConfig's fields of the same names
+RUN_LEARNING = (DOD, XI, PSEUDO_UPDATE)
 
 
 @dataclass(frozen=True)
 class RunConfig:
     iterations: int = 5000
     seed: int = 0
+    # the learning parameters of RUN_LEARNING; None: the scenario's
     dod: float | None = None
     xi: float | None = None
     pseudo_update: bool | None = None
@@ -95,7 +101,7 @@ class Simulation:
         sc, robot = self.sc, self.robot
         # d(t) of the metrics: after the whole iteration, or before the time increase (open choice)
         rec = MetricRecorder(sc.drive_names, [d.threshold for d in sc.drives], keep=self.cfg.series).follow(
-            robot.perception, sc.open["metrics_sample"] == "after_action")
+            robot.perception, sc.open.metrics_sample == "after_action")
         record = rec.on_tick
         bayes = self.cfg.intention == BAYES
         actions: list = []
@@ -189,8 +195,7 @@ def run_episode(cfg: RunConfig, sc: Scenario | None = None, on_tick=None, keep_a
         robot = sim.policy
         qtable_io.save(robot.q, cfg.save_q, meta={
             "iterations": cfg.iterations, "seed": cfg.seed, "policy": cfg.policy, "adaptive_dod": cfg.adaptive_dod,
-            "dod": getattr(robot, "dod", None), "xi": getattr(robot, "xi", None),
-            "pseudo_update": getattr(robot, "pseudo", None)})
+            **{s.name: getattr(robot, s.name, None) for s in RUN_LEARNING}})
     if cfg.save_intention and sim.model is not None:
         sim.model.save(cfg.save_intention, meta={"iterations": cfg.iterations, "seed": cfg.seed})
     return res

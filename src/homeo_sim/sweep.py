@@ -22,18 +22,21 @@ from typing import Callable, Iterable, Sequence
 import numpy as np
 
 from homeo_decision.scenario import Scenario
+from homeo_decision.scenario.reference import DOD_SWEEP, PSEUDO_SWEEP, XI_SWEEP
+from homeo_msgs_py.learning import DOD, PSEUDO_UPDATE, XI
 
 from .metrics import INSECURE
 from .parallel import parallel_map
-from .runner import RunConfig, Simulation, cached_scenario
+from .runner import RUN_LEARNING, RunConfig, Simulation, cached_scenario
 from .stats import aggregate
 
 # the sweeps of the thesis: Fig 4.3 (xi), Fig 4.5 (DoD 0..1 by 0.1), Fig 4.4 (pseudo update on/off)
 SWEEPS: dict[str, tuple] = {
-    "xi": (0.0, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0),
-    "dod": tuple(round(i / 10, 1) for i in range(11)),
-    "pseudo": (True, False),
+    XI_SWEEP: (0.0, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0),
+    DOD_SWEEP: tuple(round(i / 10, 1) for i in range(11)),
+    PSEUDO_SWEEP: (True, False),
 }
+SWEPT = {XI_SWEEP: XI, DOD_SWEEP: DOD, PSEUDO_SWEEP: PSEUDO_UPDATE}  # the learning parameter each sweep varies
 
 # learning speed: the first iteration at which a trailing moving window of LEARNING_WINDOW
 # iterations reaches HSR >= LEARN_HSR (resp. RSR >= LEARN_RSR); windows shorter than
@@ -45,22 +48,18 @@ CURVE_POINTS = 500
 
 
 def point_config(param: str, value, base: RunConfig) -> RunConfig:
-    """The configuration of one sweep point."""
-    if param == "xi":
-        return replace(base, xi=float(value))
-    if param == "dod":
-        return replace(base, dod=float(value))
-    if param == "pseudo":
-        return replace(base, pseudo_update=bool(value))
-    raise ValueError(f"unknown sweep parameter {param!r}; known: {', '.join(SWEEPS)}")
+    """The configuration of one sweep point (a value its parameter's declaration refuses: ValueError)."""
+    spec = SWEPT.get(param)
+    if spec is None:
+        raise ValueError(f"unknown sweep parameter {param!r}; known: {', '.join(SWEEPS)}")
+    return replace(base, **{spec.name: spec.check(value)})  # RunConfig's fields bear the parameters' names
 
 
 def explicit(cfg: RunConfig, sc: Scenario) -> RunConfig:
-    """``cfg`` with DoD, xi and pseudo update spelled out from the scenario, so equal runs compare equal."""
-    L = sc.learning
-    return replace(cfg, dod=float(L["dod"] if cfg.dod is None else cfg.dod),
-                   xi=float(L["xi"] if cfg.xi is None else cfg.xi),
-                   pseudo_update=bool(L["pseudo_update"] if cfg.pseudo_update is None else cfg.pseudo_update))
+    """``cfg`` with its learning parameters (DoD, xi, pseudo update) spelled out from the scenario, so
+    equal runs compare equal."""
+    value = lambda s: sc.learning[s.name] if getattr(cfg, s.name) is None else getattr(cfg, s.name)  # noqa: E731
+    return replace(cfg, **{s.name: s.check(value(s)) for s in RUN_LEARNING})
 
 
 def _key(cfg: RunConfig) -> str:
@@ -144,7 +143,7 @@ def run_job(cfg: RunConfig, curves: bool = False) -> JobResult:
         }
         if ctl is not None:
             # DoD in force after each kept iteration (a step function of the adjustments)
-            out.curves["dod"] = vals[np.searchsorted(ts, idx + 1, side="right") - 1].astype(np.float32)
+            out.curves[DOD.name] = vals[np.searchsorted(ts, idx + 1, side="right") - 1].astype(np.float32)
     return out
 
 

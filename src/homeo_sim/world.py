@@ -19,8 +19,8 @@ class World:
 
     def reset(self) -> None:
         o = self.sc.open
-        values = {"robot.location": o["initial_location"], "human.presence": "present", "intention": NONE_INTENTION}
-        values.update(o["initial_objects"])
+        values = {"robot.location": o.initial_location, "human.presence": "present", "intention": NONE_INTENTION}
+        values.update(o.initial_objects)
         self.code = self.sc.encode(values)
 
     def execute(self, action: int) -> int:

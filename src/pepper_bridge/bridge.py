@@ -62,7 +62,7 @@ class PepperBridge:
         self.location = self.cfg.start_location
         # object states as the bridge believes them ("object.variable" -> value): the scenario's
         # initial states, then what the actions set (a sensed variable overrides its belief)
-        init = dict(self.sc.open.get("initial_objects") or {})
+        init = self.sc.open.initial_objects
         self.states = {f"{o}.{var}": init.get(f"{o}.{var}", vals[0])
                        for o, spec in self.sc.objects.items() for var, vals in spec["variables"].items()}
         self.sensed: dict = {}

@@ -95,11 +95,11 @@ def _compile(sc: Scenario) -> None:
     absent = RELATIONS.index("absent")
     # the relation where the simulation places its human, per robot location (Section 4.2.1)
     located = [RELATIONS.index(sc.located_relation(loc, "present")) for loc in base_values[loc_k]]
-    on_leave = sc.open["on_leave_effects"]  # objects left behind take their on_leave values
+    on_leave = sc.open.on_leave_effects  # objects left behind take their on_leave values
     # Eq 3.17 sums over all of A; Table 3.3's constraints exclude actions (default) or, read as
     # "has no effect", leave them selectable but idle (open choices invalid_actions, always_valid_actions)
-    all_of_a = sc.open["invalid_actions"] == "no_effect"
-    unconstrained = frozenset(sc.open["always_valid_actions"])
+    all_of_a = sc.open.invalid_actions == "no_effect"
+    unconstrained = frozenset(sc.open.always_valid_actions)
     for code, (view, idx) in enumerate(zip(views, codes_vals)):
         s = [0.0] * len(motivs)
         present = []

@@ -1,8 +1,8 @@
 """Loading and validation of a scenario file; every malformed part is a one-line ScenarioError.
 
 ``load_scenario`` reads a JSON file (the shipped thesis scenario by default),
-``scenario_from_dict`` validates a parsed one and hands it to ``compile.py``. ``OPEN_CHOICES``
-lists the choices the thesis leaves open (docs/FIDELITY.md), with defaults and allowed values.
+``scenario_from_dict`` validates a parsed one and hands it to ``compile.py``. The ``open`` block
+(the choices the thesis leaves open) is declared and validated in ``open_choices.py``.
 """
 
 from __future__ import annotations
@@ -11,69 +11,18 @@ import json
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
+from homeo_msgs_py.learning import DOD, LEARNING, check_learning
+
 from .compile import _compile
-from .model import (NO_MOTIVATION, NONE_INTENTION, NULL_OBJECT, OBS_CHANNELS, PRESENCE, RELATIONS, DISTANCES, SCHEMA,
+from .open_choices import Names, parse_open
+from .model import (HUMAN_VARS, NONE_INTENTION, NULL_OBJECT, OBS_CHANNELS, PRESENCE, RELATIONS, DISTANCES, SCHEMA,
                     SCHEMA_VERSION, ActionSpec, DriveSpec, IntentionSpec, ObservationSpec, Scenario, ScenarioError)
 from .reference import parse_reference
 from .rule_policy import parse_rule_policy
 
-ANY_ACTION = "<action>"  # in OPEN_CHOICES: any action name of the scenario is allowed too
-ANY_ACTION_LIST = "<actions>"  # in OPEN_CHOICES: a list of distinct action names of the scenario
-DRIVE_READINGS = "<drive readings>"  # in OPEN_CHOICES: an object {drive name: one of GROWTH_READINGS}
-# when a drive other than the serving one grows (open choice drive_growth; docs/FIDELITY.md):
-# every tick (Table 4.2), only on ticks the human is not near the robot (Sec 3.3.1, NSoc: "increases
-# when the robot is not interacting with human"), only on ticks whose action changed the robot's
-# location (Sec 3.3.1, NRes: "assumed to increase as robot moves"), or on every tick whose action
-# does not lower it (NSoc "is lowered when the robot chats", NRes: joints heat up "in motion or
-# maintaining certain postures" and cool while resting)
-GROWTH_READINGS = ("always", "human_not_near", "robot_moved", "not_lowered")
-# the human's variables: the human (or the robot's senses) sets them, never an action or the initial state
-HUMAN_VARS = ("human.relation", "human.presence", "intention")
-
-# Choices the thesis leaves open, with their defaults and allowed values (a pair of floats =
-# any number in that range; ANY_ACTION = also any action name of the scenario). docs/FIDELITY.md explains each.
-OPEN_CHOICES: dict[str, tuple[Any, Any]] = {
-    "initial_q": (0.0, (-1e6, 1e6)),
-    "scold_drive_change": (0.0, (-100.0, 100.0)),
-    # does the serving drive grow every tick, only while an intention is expressed, or only while
-    # one is expressed and not yet satisfied (Table 4.2)
-    "serving_growth": ("always", ("always", "expressed", "unsatisfied")),
-    "reward_span": ("iteration", ("iteration", "action")),
-    # whether objects' on_leave settings apply when the robot leaves their location
-    "on_leave_effects": (True, (True, False)),
-    "tie_break": ("first", ("first", "last")),
-    "value_max_over": ("all", ("all", "valid")),
-    "human_no_intention_prob": (0.0, (0.0, 1.0)),
-    "human_leave_prob": (0.0, (0.0, 1.0)),
-    "human_return_prob": (1.0, (0.0, 1.0)),
-    # which desired action the human proposes when its intention has several: the first, a random
-    # one, or a named action (when it is among the desired ones, else the first)
-    "human_proposal_choice": ("first", ("first", "random", ANY_ACTION)),
-    "human_proposal_prob": (1.0, (0.0, 1.0)),
-    "metrics_sample": ("end", ("end", "after_action")),
-    # which actions the softmax of Eq 3.17 ranges over: only those whose Table 3.3 constraint holds
-    # ("excluded"), or all of A, an action whose constraint fails then changing nothing ("no_effect")
-    "invalid_actions": ("excluded", ("excluded", "no_effect")),
-    # actions whose Table 3.3 constraint is dropped (selectable and effective everywhere): a list of
-    # action names of the scenario (checked in _check_open)
-    "always_valid_actions": ((), ANY_ACTION_LIST),
-    # within a tick, the Table 4.2 time increase comes after the action's and the feedback's effects
-    # (default) or before them; with clamping at 0 and 100 the order matters at the bounds
-    "time_increase": ("after_action", ("after_action", "before_action")),
-    # drives (not the serving one: serving_growth) that grow only on some ticks: {drive: reading}
-    "drive_growth": ({}, DRIVE_READINGS),
-    # when no motivation is activated (every intensity 0, Definition 6): Eq 3.3's argmax still picks one
-    # (ties: tie_break), or there is no dominant motivation, an extra internal state "none" (Sec 3.1.3:
-    # "all activated motivations will compete"; Sec 4.2.3: "a robot without dominant motivation")
-    "no_activated_motivation": ("argmax", ("argmax", "none")),
-    # intention recognition (Section 2.3; docs/INTENTION.md): the recogniser and the simulated user
-    "intention_threshold": (0.0, (0.0, 1.0)),  # below this posterior the recognised intention is `none`
-    "intention_prior_strength": (10.0, (0.0, 1e6)),  # textbook observations each prior CPD column is worth
-    "intention_reveal": ("proposal", ("proposal", "feedback", "never")),  # which responses reveal the intention
-    "gesture_noise": (0.0, (0.0, 1.0)),  # P(a channel's symbol is uniform noise instead of the user's habit)
-    "movement_noise": (0.0, (0.0, 1.0)),
-    "keyword_noise": (0.0, (0.0, 1.0)),
-}
+SCHEDULE = "schedule"  # the learning block's alpha/tau phases (objectq.schedule_from)
+DEFAULT_SCHEDULE = ({"from": 0, "alpha": 0.3, "tau": 4.0}, {"from": 1000, "alpha": 0.1, "tau": 2.0})
+ANY_ACTION = "<action>"  # kept for importers: human_proposal_choice may name any action of the scenario
 
 
 def load_scenario(path: str | Path | None = None, overrides: Mapping[str, Any] | None = None) -> Scenario:
@@ -287,17 +236,13 @@ def _scenario_from_dict(raw: Any, source: str, overrides: Mapping[str, Any] | No
             raise ScenarioError(f"{where}: object {o!r} has no actions")
 
     fb = raw.get("feedback", {})
-    learning = dict(raw.get("learning", {}))
-    learning.setdefault("gamma", 0.5)
-    learning.setdefault("xi", 1.0)
-    learning.setdefault("dod", 1.0 / len(drives))
-    learning.setdefault("schedule", [{"from": 0, "alpha": 0.3, "tau": 4.0}, {"from": 1000, "alpha": 0.1, "tau": 2.0}])
-    learning.setdefault("pseudo_update", True)
-    _check_learning(learning, where)
+    learning = _check_learning(raw.get("learning", {}), len(drives), where)
 
-    open_ = dict(raw.get("open", {}))
-    open_.update(overrides or {})
-    opens = _check_open(open_, dnames, objects, base_vars, all_vars, anames, where, serving_name, motiv)
+    block = raw.get("open", {})
+    if not isinstance(block, dict):
+        raise ScenarioError(f"{where}: open must be an object")
+    opens = parse_open({**block, **dict(overrides or {})}, Names(frozenset(anames), tuple(dnames), serving_name),
+                       locations, base_vars, all_vars, motiv, where)
     observations = None
     if "observations" in raw:
         observations = _parse_observations(raw["observations"], [NONE_INTENTION] + [i.name for i in intentions], where)
@@ -407,12 +352,20 @@ def _parse_observations(obs: Any, intention_names: list, where: str) -> Observat
     return ObservationSpec(alphabets, prior_intention, prior, habits)
 
 
-def _check_learning(learning: dict, where: str) -> None:
-    for key, lo, hi in (("gamma", 0.0, 1.0), ("xi", 0.0, 1e6), ("dod", 0.0, 1.0)):
-        v = learning[key]
-        if not isinstance(v, (int, float)) or isinstance(v, bool) or not lo <= v <= hi:
-            raise ScenarioError(f"{where}: learning.{key} = {v!r} is outside [{lo}, {hi}]")
-    sched = learning["schedule"]
+def _check_learning(block: Any, n_drives: int, where: str) -> dict:
+    """The ``learning`` block: the learning parameters as declared (``homeo_msgs_py.learning``; one
+    left out takes the declared default, DoD 1 / number of drives) and the alpha/tau ``schedule``."""
+    if not isinstance(block, dict):
+        raise ScenarioError(f"{where}: learning must be an object")
+    given = {k: v for k, v in block.items() if k != SCHEDULE}
+    try:
+        params = check_learning(given)
+    except ValueError as exc:
+        raise ScenarioError(f"{where}: learning.{exc}") from None
+    defaults = {s.name: s.default for s in LEARNING} | {DOD.name: 1.0 / n_drives}  # equal weights (Eq 3.28)
+    learning = params | {k: v for k, v in defaults.items() if k not in params}
+    learning[SCHEDULE] = block.get(SCHEDULE, [dict(phase) for phase in DEFAULT_SCHEDULE])
+    sched = learning[SCHEDULE]
     if not isinstance(sched, list) or not sched or sched[0].get("from") != 0:
         raise ScenarioError(f"{where}: learning.schedule must be a list starting with from = 0")
     last = -1
@@ -422,64 +375,4 @@ def _check_learning(learning: dict, where: str) -> None:
         if not 0 < s["alpha"] <= 1 or not s["tau"] > 0:
             raise ScenarioError(f"{where}: learning.schedule: alpha must be in (0, 1] and tau > 0")
         last = s["from"]
-
-
-def _check_open(open_: dict, dnames, objects, base_vars, all_vars, anames, where, serving=None, motivations=()) -> dict:
-    out = {}
-    for key, val in open_.items():
-        if key in ("initial_drives", "initial_location", "initial_objects"):
-            continue
-        if key not in OPEN_CHOICES:
-            raise ScenarioError(f"{where}: unknown open choice {key!r}; known: {', '.join(sorted(OPEN_CHOICES))}")
-    for key, (default, allowed) in OPEN_CHOICES.items():
-        val = open_.get(key, default)
-        if isinstance(allowed, tuple) and len(allowed) == 2 and all(isinstance(x, float) for x in allowed):
-            if not isinstance(val, (int, float)) or isinstance(val, bool) or not allowed[0] <= val <= allowed[1]:
-                raise ScenarioError(f"{where}: open.{key} = {val!r} must be a number in [{allowed[0]}, {allowed[1]}]")
-            val = float(val)
-        elif allowed == ANY_ACTION_LIST:
-            if not isinstance(val, (list, tuple)) or not all(isinstance(x, str) and x in anames for x in val) \
-                    or len(set(val)) != len(val):
-                raise ScenarioError(f"{where}: open.{key} = {val!r} must be a list of distinct action names "
-                                    f"({', '.join(sorted(anames))})")
-            val = list(val)
-        elif allowed == DRIVE_READINGS:
-            if not isinstance(val, dict) or not all(isinstance(k, str) and k in dnames and k != serving
-                                                    and v in GROWTH_READINGS for k, v in val.items()):
-                others = [d for d in dnames if d != serving]
-                raise ScenarioError(f"{where}: open.{key} = {val!r} must map drive names ({', '.join(others)}; the "
-                                    f"serving drive's is serving_growth) to one of {list(GROWTH_READINGS)}")
-            val = {k: val[k] for k in dnames if k in val}
-        elif ANY_ACTION in allowed:
-            named = [x for x in allowed if x != ANY_ACTION]
-            if not isinstance(val, str) or (val not in named and val not in anames):
-                raise ScenarioError(f"{where}: open.{key} = {val!r} must be one of {named} or an action name "
-                                    f"({', '.join(sorted(anames))})")
-        elif val not in allowed or isinstance(val, bool) != isinstance(allowed[0], bool):
-            raise ScenarioError(f"{where}: open.{key} = {val!r} must be one of {list(allowed)}")
-        out[key] = val
-    init = open_.get("initial_drives", {})
-    for dn, v in init.items():
-        if dn not in dnames:
-            raise ScenarioError(f"{where}: open.initial_drives has unknown drive {dn!r}")
-        if not isinstance(v, (int, float)) or not 0 <= v <= 100:
-            raise ScenarioError(f"{where}: open.initial_drives.{dn} = {v!r} must be in [0, 100]")
-    if out["no_activated_motivation"] == "none" and NO_MOTIVATION in motivations:
-        raise ScenarioError(f"{where}: open.no_activated_motivation = 'none' needs the name {NO_MOTIVATION!r}, "
-                            f"which a motivation already has")
-    out["initial_drives"] = [float(init.get(dn, 0.0)) for dn in dnames]
-    loc = open_.get("initial_location", all_vars["robot.location"][0])
-    if loc not in all_vars["robot.location"]:
-        raise ScenarioError(f"{where}: open.initial_location {loc!r} is not a location")
-    out["initial_location"] = loc
-    objs = dict(open_.get("initial_objects", {}))
-    for var, val in objs.items():
-        if var not in all_vars or var in ("robot.location", *HUMAN_VARS) or var not in base_vars:
-            raise ScenarioError(f"{where}: open.initial_objects has unknown object variable {var!r}")
-        if val not in all_vars[var]:
-            raise ScenarioError(f"{where}: open.initial_objects.{var} = {val!r}; values: {all_vars[var]}")
-    for var in base_vars[3:]:
-        objs.setdefault(var, all_vars[var][0])
-    out["initial_objects"] = objs
-    return out
-
+    return learning

@@ -31,6 +31,8 @@ NO_MOTIVATION = "none"  # the internal state without a dominant motivation (open
 NULL_OBJECT = "null"
 PRESENCE = ("present", "absent")
 RELATIONS = ("near", "far", "absent")
+# the human's variables: the human (or the robot's senses) sets them, never an action or the initial state
+HUMAN_VARS = ("human.relation", "human.presence", "intention")
 DISTANCES = ("near", "far")
 
 # Observed children of the hidden intention in the Bayesian network (Section 2.3, Fig 2.3).
@@ -145,8 +147,8 @@ class Scenario:
     intentions: tuple
     feedback_value: float
     praise_change: float
-    learning: dict
-    open: dict
+    learning: dict  # the learning parameters by name (homeo_msgs_py.learning) and the alpha/tau schedule
+    open: "OpenChoices"  # the open choices and the initial state (open_choices.py)
     source: str = "<memory>"
     # compiled
     base_vars: tuple = ()
@@ -171,12 +173,12 @@ class Scenario:
         """The values of m_dom (Eq 3.6): the motivations, and ``none`` when the open choice
         ``no_activated_motivation`` is ``none``."""
         names = self.motivation_names
-        return names + [NO_MOTIVATION] if self.open.get("no_activated_motivation") == "none" else names
+        return names + [NO_MOTIVATION] if self.open.no_activated_motivation == "none" else names
 
     @property
     def none_state(self) -> int:
         """The index of m_dom ``none`` (-1: Eq 3.3's argmax always picks a motivation)."""
-        return len(self.drives) if self.open.get("no_activated_motivation") == "none" else -1
+        return len(self.drives) if self.open.no_activated_motivation == "none" else -1
 
     @property
     def action_names(self) -> list[str]:

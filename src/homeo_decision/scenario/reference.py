@@ -4,7 +4,7 @@
       "source": "where the numbers come from",
       "metrics": {"HSR": 0.82, "RSR": 0.9, "CDA": {"<drive>": 1.7, "all": 32.5}, "CEDA": {...}},
       "statements": {                       # what the source says about the sweeps
-        "xi": ["..."], "pseudo": ["..."], "dod": ["..."],    # quoted in the report
+        "<sweep>": ["..."],                 # per sweep (SWEEP_NAMES: xi, pseudo, dod), quoted in the report
         "rsr_at_xi0_below": 0.4,            # RSR(xi 0) below this
         "hsr_at_dod0": 0.6,                 # HSR(DoD 0) about this (within 0.1)
         "rsr_below_half_from_dod": 0.5,     # RSR < 0.5 from about this DoD on (within 0.1)
@@ -31,9 +31,15 @@ from __future__ import annotations
 
 from typing import Any, Sequence
 
+from homeo_msgs_py.learning import DOD, XI
+
 from .model import ReferenceSpec, ScenarioError
 
-STATEMENT_TEXTS = ("xi", "pseudo", "dod")
+# the thesis's sweeps (homeo_sim.sweep runs them), each over one learning parameter and named by it;
+# the pseudo update's by a short name. Statements, criteria and result labels (``xi=0.0``) use these
+XI_SWEEP, DOD_SWEEP, PSEUDO_SWEEP = XI.name, DOD.name, "pseudo"
+SWEEP_NAMES = (XI_SWEEP, DOD_SWEEP, PSEUDO_SWEEP)
+STATEMENT_TEXTS = (XI_SWEEP, PSEUDO_SWEEP, DOD_SWEEP)
 STATEMENT_NUMBERS = ("rsr_at_xi0_below", "hsr_at_dod0", "rsr_below_half_from_dod", "best_dod")
 STATEMENT_DRIVES = ("pseudo_unaffected_drive",)
 
@@ -101,7 +107,7 @@ CRITERION_FIELDS = {
     "linear": ("sweep", "metric", "points", "tol"),
     "best_near": ("sweep", "product", "value", "tol"),
 }
-_SWEEPS = ("xi", "dod", "pseudo")
+_SWEEPS = SWEEP_NAMES
 _LABEL_FIELDS, _METRIC_FIELDS = ("at", "from", "to", "a", "b"), ("metric",)
 
 

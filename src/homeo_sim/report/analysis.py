@@ -16,7 +16,10 @@ import numpy as np
 
 from homeo_decision.adaptive_dod import AdaptiveDoDSettings
 
-from ..runner import RunConfig
+from homeo_decision.scenario.reference import DOD_SWEEP
+from homeo_msgs_py.learning import DOD
+
+from ..runner import RUN_LEARNING, RunConfig
 from ..stats import describe
 from .fidelity import fidelity
 from ..sweep import LEARN_HSR, LEARN_RSR, LEARNING_WINDOW, SWEEPS, JobResult, median_time, point_config
@@ -92,7 +95,7 @@ def _at(results: Sequence[JobResult], t: int, *path) -> dict:
 def _analyse(sc, base: RunConfig, R: dict, M: dict, seeds: int) -> dict:
     mean = lambda k, *p: _get(M[k], *p)["mean"]  # noqa: E731
     d: dict = {"seeds": seeds, "iterations": base.iterations, "scenario": sc.name, "fingerprint": sc.fingerprint(),
-               "open": sc.open, "base": {"dod": base.dod, "xi": base.xi, "pseudo_update": base.pseudo_update}}
+               "open": sc.open.as_dict(), "base": {s.name: getattr(base, s.name) for s in RUN_LEARNING}}
     d["table_4_5"] = M["base"]
     d["sweeps"] = {p: [{"value": v, "metrics": M[f"{p}={v}"]} for v in vals] for p, vals in SWEEPS.items()}
     # early stage of the pseudo-update runs (Fig 4.4)
@@ -120,10 +123,10 @@ def _analyse(sc, base: RunConfig, R: dict, M: dict, seeds: int) -> dict:
     d["policies"] = pols
     ad = R["adaptive"]
     d["adaptive"] = {"dod_final": describe([r.extra["dod_final"] for r in ad]), "settings": AdaptiveDoDSettings().__dict__}
-    key_of = {v: f"dod={v}" for v in SWEEPS["dod"]} | {base.dod: "base"}  # the grid and the default DoD
+    key_of = {v: f"{DOD_SWEEP}={v}" for v in SWEEPS[DOD_SWEEP]} | {base.dod: "base"}  # the grid and the default DoD
     dod_pts = [(v, describe([r.metrics["HSR"] * r.metrics["RSR"] for r in R[k]])) for v, k in sorted(key_of.items())]
     best_v, best = max(dod_pts, key=lambda p: p[1]["mean"])
-    d["adaptive"]["best_fixed"] = {"dod": best_v, "HSRxRSR": best, "metrics": M[key_of[best_v]]}
+    d["adaptive"]["best_fixed"] = {DOD.name: best_v, "HSRxRSR": best, "metrics": M[key_of[best_v]]}
     # paired over seeds (the same seed gives the same human in both runs)
     d["adaptive"]["paired_diff"] = describe([a.metrics["HSR"] * a.metrics["RSR"] - b.metrics["HSR"] * b.metrics["RSR"]
                                              for a, b in zip(ad, R[key_of[best_v]])])
@@ -131,7 +134,7 @@ def _analyse(sc, base: RunConfig, R: dict, M: dict, seeds: int) -> dict:
     d["checks"] = _checks(sc, M, pols, early, mean, base.iterations)
     # the fidelity score: Table 4.5 against our intervals, and the text's statements about the sweeps
     # against their criteria (both from the scenario's reference block; none without one)
-    d["fidelity"] = fidelity(sc.reference, M, SWEEPS, {"dod": base.dod})
+    d["fidelity"] = fidelity(sc.reference, M, SWEEPS, {DOD_SWEEP: base.dod})
     d["statements"] = d["fidelity"]["statements"]
     return d
 

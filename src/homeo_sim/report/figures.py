@@ -11,6 +11,9 @@ from typing import Sequence
 
 import numpy as np
 
+from homeo_decision.scenario.reference import DOD_SWEEP, XI_SWEEP
+from homeo_msgs_py.learning import DOD
+
 from ..stats import t975
 from ..sweep import LEARN_HSR, LEARN_RSR, LEARNING_WINDOW, JobResult
 from .analysis import BASELINES, POLICY_LABELS, _curve, _get
@@ -96,12 +99,12 @@ def _figures(out: Path, sc, R: dict, M: dict, d: dict) -> None:
     fig.savefig(out / "fig4_2_hsr_rsr.png", dpi=110)
     plt.close(fig)
 
-    fig_xi(out / "fig4_3_xi.png", d["sweeps"]["xi"], st)
+    fig_xi(out / "fig4_3_xi.png", d["sweeps"][XI_SWEEP], st)
     other = st["pseudo_unaffected_drive"] if st else None
     fig_pseudo(out / "fig4_4_pseudo.png", R["pseudo=True"], R["pseudo=False"], sc.drive_names[sc.serving], other=other)
     fig_pseudo(out / "fig4_4_pseudo_early.png", R["pseudo=True"], R["pseudo=False"], sc.drive_names[sc.serving],
                until=1000, other=other)
-    fig_dod(out / "fig4_5_dod.png", d["sweeps"]["dod"], names, st)
+    fig_dod(out / "fig4_5_dod.png", d["sweeps"][DOD_SWEEP], names, st)
 
     # baselines: end metrics and learning curves
     baselines = [p for p in BASELINES if p in d["policies"]]
@@ -140,19 +143,19 @@ def _figures(out: Path, sc, R: dict, M: dict, d: dict) -> None:
     # adaptive DoD
     fig, axes = plt.subplots(1, 2, figsize=(11, 4))
     ad = R["adaptive"]
-    arr = _curve(ad, "dod")
+    arr = _curve(ad, DOD.name)
     for row in arr:
         axes[0].plot(t, row, color="0.8", lw=0.5)
     _plot_band(axes[0], t, arr, "adaptive DoD (mean, 95% band)", "C0")
-    axes[0].axhline(d["base"]["dod"], color="C3", ls=":", label=f"fixed default {d['base']['dod']}")
-    axes[0].axhline(d["adaptive"]["best_fixed"]["dod"], color="C2", ls="--",
-                    label=f"best fixed DoD (HSR x RSR): {d['adaptive']['best_fixed']['dod']}")
+    fixed, best = d["base"][DOD.name], d["adaptive"]["best_fixed"][DOD.name]
+    axes[0].axhline(fixed, color="C3", ls=":", label=f"fixed default {fixed}")
+    axes[0].axhline(best, color="C2", ls="--", label=f"best fixed DoD (HSR x RSR): {best}")
     axes[0].set_ylim(0, 1)
     axes[0].set_xlabel("iteration")
     axes[0].legend(fontsize=8)
     axes[0].set_title("DoD over time")
     ax = axes[1]
-    for p in d["sweeps"]["dod"]:
+    for p in d["sweeps"][DOD_SWEEP]:
         m = p["metrics"]
         ax.errorbar(m["RSR"]["mean"], m["HSR"]["mean"], xerr=_err(m["RSR"]), yerr=_err(m["HSR"]), fmt="o", color="C0",
                     ms=4, capsize=2)

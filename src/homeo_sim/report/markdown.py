@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import json
 
+from homeo_decision.scenario.reference import DOD_SWEEP, PSEUDO_SWEEP, XI_SWEEP
+from homeo_msgs_py.learning import DOD, XI
+
 from ..runner import RunConfig
 from ..sweep import LEARN_HSR, LEARN_RSR, LEARNING_WINDOW
 from .analysis import BASELINES, POLICY_LABELS, _fmt, _t
@@ -83,11 +86,11 @@ def _markdown(sc, base: RunConfig, M: dict, d: dict, seeds: int) -> str:
               f"{_fmt(mm['CEDA']['all'], 2)} | {_fmt(mm['CDA'][names[sc.serving]], 2)} |")
 
     w("## Fig 4.3: motivation factor xi\n")
-    sweep_table("xi", "xi", lambda v: f"{v:g}")
-    w(("\nThe thesis says: " + "; ".join(says["xi"]) + ".\n" if says else "") + "\n![Fig 4.3](fig4_3_xi.png)\n")
+    sweep_table(XI_SWEEP, XI.name, lambda v: f"{v:g}")
+    w(("\nThe thesis says: " + "; ".join(says[XI_SWEEP]) + ".\n" if says else "") + "\n![Fig 4.3](fig4_3_xi.png)\n")
 
     w("## Fig 4.4: pseudo update\n")
-    sweep_table("pseudo", "pseudo update", lambda v: "on" if v else "off")
+    sweep_table(PSEUDO_SWEEP, "pseudo update", lambda v: "on" if v else "off")
     e = d["pseudo_early"]
     w("\nEarly stage (cumulative values after 500 and 1000 iterations; learning speed as defined under Baselines):\n")
     w(f"| pseudo update | HSR@500 | HSR@1000 | CDA {names[sc.serving]}@500 | CDA {names[sc.serving]}@1000 | "
@@ -97,12 +100,12 @@ def _markdown(sc, base: RunConfig, M: dict, d: dict, seeds: int) -> str:
         w(f"| {k} | {_fmt(x['HSR@500'])} | {_fmt(x['HSR@1000'])} | {_fmt(x[f'CDA_{serving}@500'], 2)} | "
           f"{_fmt(x[f'CDA_{serving}@1000'], 2)} | {_t(x['learn_HSR']['median'])} ({x['learn_HSR']['reached']}/{x['learn_HSR']['of']}) |")
     if says:
-        w("\nThe thesis says: " + "; ".join(says["pseudo"]) + ".\n")
+        w("\nThe thesis says: " + "; ".join(says[PSEUDO_SWEEP]) + ".\n")
     w("![Fig 4.4](fig4_4_pseudo.png)\n\n![Fig 4.4, first 1000 iterations](fig4_4_pseudo_early.png)\n")
 
     w("## Fig 4.5: Degree of Dedication\n")
-    sweep_table("dod", "DoD", lambda v: f"{v:g}")
-    w(("\nThe thesis says: " + "; ".join(says["dod"]) + ".\n" if says else "") + "\n![Fig 4.5](fig4_5_dod.png)\n")
+    sweep_table(DOD_SWEEP, "DoD", lambda v: f"{v:g}")
+    w(("\nThe thesis says: " + "; ".join(says[DOD_SWEEP]) + ".\n" if says else "") + "\n![Fig 4.5](fig4_5_dod.png)\n")
 
     w("## Baselines\n")
     w(f"Learning speed = the first iteration at which the rate over the trailing {LEARNING_WINDOW} iterations (a moving "
@@ -140,7 +143,7 @@ def _markdown(sc, base: RunConfig, M: dict, d: dict, seeds: int) -> str:
     w("| | DoD | HSR | RSR | HSR x RSR |\n|---|---|---|---|---|")
     w(f"| adaptive | ends at {_fmt(a['dod_final'], 2)} | {_fmt(pa['metrics']['HSR'])} | {_fmt(pa['metrics']['RSR'])} | "
       f"{_fmt(pa['HSRxRSR'])} |")
-    w(f"| best fixed DoD (by HSR x RSR over the 0.1 grid and {base.dod:g}, chosen after the fact) | {bf['dod']:g} | {_fmt(bf['metrics']['HSR'])} | "
+    w(f"| best fixed DoD (by HSR x RSR over the 0.1 grid and {base.dod:g}, chosen after the fact) | {bf[DOD.name]:g} | {_fmt(bf['metrics']['HSR'])} | "
       f"{_fmt(bf['metrics']['RSR'])} | {_fmt(bf['HSRxRSR'])} |")
     po = d["policies"]["objectq"]
     w(f"| thesis default | {base.dod:g} | {_fmt(po['metrics']['HSR'])} | {_fmt(po['metrics']['RSR'])} | "
