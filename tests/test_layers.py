@@ -172,3 +172,19 @@ def test_no_drive_object_action_or_motivation_name_of_the_thesis_in_code(thesis)
                 hits.append(f"{f.relative_to(SRC)}:{node.lineno}: {sorted(bad)}")
     assert len(files) > 50
     assert not hits, "\n".join(hits)
+
+
+def test_the_learning_parameters_are_named_in_one_place():
+    """Each learning parameter is declared once (``homeo_msgs_py.learning``): its name is a string
+    literal there, and wherever else it is written the code says ``DOD.name`` (issue 22: at most 8
+    modules; today one)."""
+    from homeo_msgs_py.learning import DOD, GAMMA, PSEUDO_UPDATE, XI
+
+    names = {s.name for s in (DOD, XI, GAMMA, PSEUDO_UPDATE)}
+    holders = set()
+    for f in sorted(SRC.rglob("*.py")):
+        tree = ast.parse(f.read_text(), str(f))
+        docs = _docstrings(tree)
+        if any(isinstance(n, ast.Constant) and n.value in names and id(n) not in docs for n in ast.walk(tree)):
+            holders.add(str(f.relative_to(SRC)))
+    assert holders == {"homeo_msgs_py/learning.py"}

@@ -58,7 +58,7 @@ def test_presence_and_relation_must_agree(toy):
 
 def test_a_sensed_relation_is_the_worlds_wherever_the_robot_is(thesis):
     near_at_r = thesis.encode({"robot.location": "R", "human.relation": "near", "intention": "none",
-                               **thesis.open["initial_objects"]})
+                               **thesis.open.initial_objects})
     v = thesis.view(near_at_r)
     assert v["human.relation"] == "near" and v["human.presence"] == "present"
     assert "Chat" in valid_names(thesis, near_at_r) and "Rest" not in valid_names(thesis, near_at_r)  # Table 3.3
@@ -78,8 +78,8 @@ def test_the_simulation_reaches_exactly_the_located_worlds(thesis):
     intentions) reach the worlds whose relation is the one the locations give: 3 locations x
     (near-or-far as located, absent) x 7 intentions x 8 object states = 336, the old count."""
     c = thesis.c
-    start = thesis.encode({"robot.location": thesis.open["initial_location"], "human.presence": "present",
-                           "intention": "none", **thesis.open["initial_objects"]})
+    start = thesis.encode({"robot.location": thesis.open.initial_location, "human.presence": "present",
+                           "intention": "none", **thesis.open.initial_objects})
     seen, todo = {start}, [start]
     while todo:
         code = todo.pop()

@@ -225,7 +225,7 @@ def test_a_world_the_simulation_never_reaches_is_refused(thesis):
     good = world_at_tick_20(thesis, 2)
     bad = copy.deepcopy(good)
     bad["state"]["world"]["env"]["world"] = thesis.encode({"robot.location": "R", "human.relation": "near",
-                                                           "intention": "none", **thesis.open["initial_objects"]})
+                                                           "intention": "none", **thesis.open.initial_objects})
     host = sim_host(thesis, 2, lambda *a: None, 40)
     before = host.world.env.state()
     with pytest.raises(CheckpointError, match="not the simulation's") as exc:

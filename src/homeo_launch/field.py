@@ -138,7 +138,7 @@ def field_result(run: dict, seed: int, default_dod: float | None = None, a=None)
     """A graph run of ``homeo_launch.pepper.run_robot`` as a FieldResult (the charging roles of the
     run's config and scenario, from its arguments ``a``)."""
     log = (run["status"].get("extra") or {}).get("log") or []
-    dod = run["dod"] if run["dod"] is not None else default_dod
+    dod = run[DOD.name] if run[DOD.name] is not None else default_dod
     roles = {}
     if a is not None:
         sc = load_scenario(a.scenario)

@@ -24,6 +24,7 @@ from pathlib import Path
 
 from homeo_msgs_py import graph as G
 from homeo_msgs_py.cli_args import UserError, float_in, int_at_least
+from homeo_msgs_py.learning import DOD, add_learning_flags
 from homeo_msgs_py.params import add_flag
 
 from .launch import PROG, GraphOptions, check_files, close_sinks, new_session, open_sinks, run_graph
@@ -51,7 +52,7 @@ def scenario_file(path: str | None, out_dir: Path, continue_schedule: bool) -> s
 
 def run_robot(a, label: str, dod: float | None, q_table: str | None, log_dir: Path, on_row=None,
               last: dict | None = None, sinks=()) -> dict:
-    """One graph run (with its own stand-in when asked); returns {"label", "dod", "status", "user_log"}."""
+    """One graph run (with its own stand-in when asked); returns the label, the DoD, the status and the user log."""
     from pepper_bridge.launch_support import StandinProcess, check_standin
     from pepper_bridge.user import load_script
 
@@ -87,13 +88,13 @@ def run_robot(a, label: str, dod: float | None, q_table: str | None, log_dir: Pa
                  "end_with_script": bool(a.standin and script)}
         world.update({s: getattr(a, s) for s in a.world_flags if getattr(a, s) is not None})
         o = GraphOptions(world="pepper", world_params=world, seed=a.seed,
-                         learning={} if dod is None else {"dod": float(dod)}, intention=INTENTION_MODES[a.intention],
+                         learning={} if dod is None else {DOD.name: float(dod)}, intention=INTENTION_MODES[a.intention],
                          scenario=scenario_file(a.scenario, log_dir, bool(q_table) and not a.fresh_schedule),
                          overrides=tuple(overrides.items()), load_q=q_table, data_dir=a.data_dir,
                          namespace=a.namespace, auth=not a.no_auth, **durable)
         status = run_graph(o, quiet=getattr(a, "quiet", False), log_dir=str(log_dir), on_status=on_status, last=last,
                            sinks=sinks, check=lambda: check_standin(standin))
-        return {"label": label, "dod": dod, "status": status,
+        return {"label": label, DOD.name: dod, "status": status,
                 "user_log": standin.user_log() if standin is not None else []}
     finally:
         if standin is not None:
@@ -137,7 +138,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--scenario", metavar="FILE", help="scenario JSON (default: the thesis scenario)")
     p.add_argument("--q-table", metavar="FILE", help="the decision node loads this Q-table at start "
                    "(with --field: one table for both robots)")
-    p.add_argument("--dod", type=float_in(0.0, 1.0), default=None, help="Degree of Dedication (Eq 3.27)")
+    add_learning_flags(p, (DOD,), help_extra=" (default: the scenario's)")
     p.add_argument("--intention", choices=tuple(INTENTION_MODES), default="cues",
                    help="cues (default): the config's keyword/gesture cues name the intention (the intention node in "
                         "oracle mode; as homeo-pepper-field); bayes: the Bayesian recogniser on the raw cues")
@@ -289,16 +290,16 @@ def _cmd_one(a, base: Path) -> int:
         code = 0
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted; all nodes stopped", file=sys.stderr)
-        run = {"label": "robot", "dod": a.dod, "status": dict(last), "user_log": []}
+        run = {"label": "robot", DOD.name: a.dod, "status": dict(last), "user_log": []}
         code = 0 if a.interactions == 0 and not a.script else 130  # an unbounded run ends with Ctrl-C
         if not (last.get("extra") or {}).get("log"):
             return 130
     finally:
         close_sinks(sinks)
-    res = field_result(run, a.seed, float(load_scenario(a.scenario).learning["dod"]), a)
+    res = field_result(run, a.seed, float(load_scenario(a.scenario).learning[DOD.name]), a)
     st = run["status"]
     if a.json:
-        out = {"seed": a.seed, "dod": res.dod, "url": (st.get("extra") or {}).get("robot", {}).get("url"),
+        out = {"seed": a.seed, DOD.name: res.dod, "url": (st.get("extra") or {}).get("robot", {}).get("url"),
                "interactions": len(res.log), "missed": st.get("missed", 0), "log": res.log}
         if res.user_log:
             out["summary"] = res.summary()

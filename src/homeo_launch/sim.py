@@ -18,10 +18,12 @@ import sys
 
 from homeo_msgs_py.cli_args import float_in, int_at_least, setting
 from homeo_msgs_py.graph import BAYES, INTENTION_MODES, SEED_MAX, TICKS_MAX
+from homeo_msgs_py.learning import DOD, PSEUDO_UPDATE, XI, add_learning_flags, add_no_pseudo_flag, learning_values
 from homeo_msgs_py.params import add_flag
 
 from .launch import PROG, GraphOptions, check_files, close_sinks, open_sinks, run_graph
 
+LAUNCH_LEARNING = (DOD, XI, PSEUDO_UPDATE)  # the decision's learning parameters a launch sets
 HELP = {"sim": "the graph with the simulated world and human; prints Table 4.5's metrics",
         "day": "the graph in the simulated home through a scripted day (homeo_sim/days); prints its metrics"}
 
@@ -35,9 +37,8 @@ def add_parser(sub, name: str, world_cls) -> None:
     s.add_argument("--iterations", type=int_at_least(0, TICKS_MAX), default=5000, help="ticks (0 = until Ctrl-C; default 5000)")
     s.add_argument("--rate", type=float_in(0.0, 1000.0), default=0.0, help="ticks per second (0 = as fast as lockstep allows)")
     s.add_argument("--seed", type=int_at_least(0, SEED_MAX), default=0, help="seed of every component (default 0)")
-    s.add_argument("--dod", type=float_in(0.0, 1.0), default=None, help="Degree of Dedication (Eq 3.27)")
-    s.add_argument("--xi", type=float_in(0.0, 1000.0), default=None, help="motivation factor xi (Eq 3.20)")
-    s.add_argument("--no-pseudo", action="store_true", help="switch off pseudo updates (Eq 3.23)")
+    add_learning_flags(s, LAUNCH_LEARNING, help_extra=" (default: the scenario's)")
+    add_no_pseudo_flag(s)
     s.add_argument("--intention", choices=INTENTION_MODES, default=BAYES,
                    help="recognise the intention with the Bayesian network (default) or observe it (the thesis's "
                         "simulation; what homeo-sim run does by default)")
@@ -79,10 +80,8 @@ def options_from_args(a) -> GraphOptions:
     from homeo_decision.world_api import world_class
 
     world_class(a.world).check(sc, world)  # a world that cannot start is a one-line error here, not in a node
-    learning = {k: float(v) for k, v in (("dod", a.dod), ("xi", a.xi)) if v is not None}
-    if a.no_pseudo:
-        learning["pseudo_update"] = False
-    return GraphOptions(world=a.world, world_params=world, seed=a.seed, learning=learning, intention=a.intention,
+    return GraphOptions(world=a.world, world_params=world, seed=a.seed, learning=learning_values(a, LAUNCH_LEARNING),
+                        intention=a.intention,
                         scenario=a.scenario or "", overrides=tuple(a.set), load_q=a.load_q, save_q=a.save_q,
                         data_dir=a.data_dir, namespace=a.namespace, auth=not a.no_auth,
                         **durable_options(a, a.world, sc, a.intention == BAYES))

@@ -40,7 +40,7 @@ class SimWorld(WorldBackend):
         super().__init__(sc, values, ctx)
         seed = values.get("seed", 0)
         self.intention_accuracy = bool(values.get("intention_learns", False))  # score the recognised intention
-        self.sample_after = sc.open["metrics_sample"] == "after_action"
+        self.sample_after = sc.open.metrics_sample == "after_action"
         self.drives_key = "after_action" if self.sample_after else "drives"
         self.person = None
         if human is None and values.get("human", SIM_HUMAN) == PERSON:
