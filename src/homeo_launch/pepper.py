@@ -27,12 +27,15 @@ from homeo_msgs_py.cli_args import UserError, float_in, int_at_least
 from homeo_msgs_py.learning import DOD, add_learning_flags
 from homeo_msgs_py.params import add_flag
 
-from .launch import PROG, GraphOptions, check_files, close_sinks, new_session, open_sinks, run_graph
+from .launch import PROG, GraphOptions, new_session, run_graph
+from .options import add_run_options, check_files, close_sinks, durable_options, open_sinks
 
 # --intention -> the intention node's mode: the config's cues name the intention (read by the oracle)
 INTENTION_MODES = {"cues": G.ORACLE, G.BAYES: G.BAYES}
-OWN_FLAGS = ("qi_url", "user", "password", "config", "naoqi_version", "collect_window", "collect_quiet",
-             "intention_cues", "end_with_script")  # world parameters this front end sets from its own options
+OWN_FLAGS = ("qi_url", "intention_cues", "end_with_script")  # world parameters this front end sets itself
+DEFAULTS = {"collect_window": " (default 3 with the stand-in, 8 on a robot)",
+            "collect_quiet": " (default 0.15 with the stand-in; on a robot the whole window)",
+            "naoqi_version": "; e.g. 2.4: voice emotion levels 0..5"}
 
 
 def scenario_file(path: str | None, out_dir: Path, continue_schedule: bool) -> str:
@@ -81,12 +84,10 @@ def run_robot(a, label: str, dod: float | None, q_table: str | None, log_dir: Pa
         durable = dict(a.durable, session=new_session())
         if durable["checkpoint_dir"] and label != "robot":  # the field test's two robots: one folder each
             durable["checkpoint_dir"] = os.path.join(durable["checkpoint_dir"], label)
-        world = {"iterations": a.interactions, "action_timeout": float(a.action_timeout), "qi_url": url,
-                 "user": a.user or "", "password": a.password or "", "config": os.path.abspath(a.config) if a.config else "",
-                 "naoqi_version": a.naoqi_version or "", "collect_window": float(a.collect_window),
-                 "collect_quiet": float(a.collect_quiet), "intention_cues": a.intention == "cues",
-                 "end_with_script": bool(a.standin and script)}
-        world.update({s: getattr(a, s) for s in a.world_flags if getattr(a, s) is not None})
+        world = {s: getattr(a, s) for s in a.world_flags if getattr(a, s) is not None}
+        world.update(iterations=a.interactions, action_timeout=float(a.action_timeout), qi_url=url,
+                     config=os.path.abspath(a.config) if a.config else "", intention_cues=a.intention == "cues",
+                     end_with_script=bool(a.standin and script))
         o = GraphOptions(world="pepper", world_params=world, seed=a.seed,
                          learning={} if dod is None else {DOD.name: float(dod)}, intention=INTENTION_MODES[a.intention],
                          scenario=scenario_file(a.scenario, log_dir, bool(q_table) and not a.fresh_schedule),
@@ -116,10 +117,6 @@ def _script_path(s: str) -> Path:
 def add_parser(subparsers) -> None:
     from pepper_bridge.world_backend import PepperWorld
 
-    from .durable_args import add_durable_options
-    from .live_args import add_live_options
-    from .processes import add_graph_options
-
     p = subparsers.add_parser("pepper", help="the graph with the Pepper world (a real robot or the stand-in)",
                               description="The node graph with the Pepper world in the world node.")
     src = p.add_mutually_exclusive_group()
@@ -128,14 +125,8 @@ def add_parser(subparsers) -> None:
     src.add_argument("--standin", action="store_true", help="start a stand-in Pepper on loopback (its own process)")
     p.add_argument("--connect-bound", type=float_in(0.5, 600.0), default=15.0,
                    help="seconds to wait for the robot at --qi-url before giving up with exit code 2 (default 15)")
-    p.add_argument("--naoqi-version", metavar="V", help="read the robot's values in NAOqi V's documented formats "
-                   "(e.g. 2.4: voice emotion levels 0..5) instead of asking it (ALSystem.systemVersion); auto = ask")
-    p.add_argument("--user", help="NAOqi 2.9 user (tcps)")
-    p.add_argument("--password", help="NAOqi 2.9 password (tcps)")
     p.add_argument("--script", metavar="FILE", help="the stand-in's scripted user (a path or a file of "
                    "pepper_bridge/scripts/); its robot.drives are the initial drives")
-    p.add_argument("--config", metavar="FILE", help="places/phrases file (default pepper_bridge/scripts/pepper.json)")
-    p.add_argument("--scenario", metavar="FILE", help="scenario JSON (default: the thesis scenario)")
     p.add_argument("--q-table", metavar="FILE", help="the decision node loads this Q-table at start "
                    "(with --field: one table for both robots)")
     add_learning_flags(p, (DOD,), help_extra=" (default: the scenario's)")
@@ -144,19 +135,11 @@ def add_parser(subparsers) -> None:
                         "oracle mode; as homeo-pepper-field); bayes: the Bayesian recogniser on the raw cues")
     p.add_argument("--interactions", type=int_at_least(0, G.TICKS_MAX), default=0,
                    help="interactions (0 = until the script ends, or Ctrl-C on a robot)")
-    p.add_argument("--seed", type=int_at_least(0, G.SEED_MAX), default=0, help="seed of the decision node and the stand-in")
     p.add_argument("--time-scale", type=float_in(0.0, 1000.0), default=0.0,
                    help="stand-in: simulated seconds per wall second (default 0: each action lasts 10 s, reproducible)")
-    p.add_argument("--collect-window", type=float_in(0.0, 600.0), default=None,
-                   help="longest wait for the user's reaction, s (default 3 with the stand-in, 8 on a robot)")
-    p.add_argument("--collect-quiet", type=float_in(0.0, 600.0), default=None,
-                   help="a gap without events that ends the wait, s (default 0.15 with the stand-in; on a robot the "
-                        "whole window)")
-    p.add_argument("--action-timeout", type=float_in(0.01, 3600.0), default=5.0,
-                   help="seconds to wait for the decision before an interaction counts as none (default 5)")
     flags = [s for s in PepperWorld.PARAMS if s.name not in OWN_FLAGS]
-    for spec in flags:  # the world's other parameters (default: the node's)
-        add_flag(p, spec)
+    for spec in flags:  # the world's parameters (default: the node's, but where DEFAULTS says otherwise)
+        add_flag(p, spec, help_extra=DEFAULTS.get(spec.name, ""))
     p.add_argument("--fresh-schedule", action="store_true", help="with a Q-table: start the learning schedule over "
                    "(default: continue in its last phase)")
     p.add_argument("--field", action="store_true", help="the field test: a dedicated (DoD 0.25) and a selfish (DoD 0) "
@@ -164,12 +147,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--q-dedicated", metavar="FILE", help="--field: the dedicated robot's Q-table (default: trained, "
                    "homeo-sim run --iterations 5000 --seed 0)")
     p.add_argument("--q-selfish", metavar="FILE", help="--field: the selfish robot's Q-table (default: trained at DoD 0)")
-    p.add_argument("--log-dir", metavar="DIR", help="keep each node's log here (default: a temporary directory)")
-    add_graph_options(p)
-    p.add_argument("--json", action="store_true", help="print the interaction log as JSON")
-    p.add_argument("--quiet", action="store_true", help="no per-interaction progress on stderr")
-    add_live_options(p)
-    add_durable_options(p, "pepper")
+    add_run_options(p, "pepper", seed_help="seed of the decision node and the stand-in")
     p.set_defaults(world_flags=tuple(s.name for s in flags))
 
 
@@ -213,8 +191,6 @@ def _check_args(a) -> None:
     load_config(a.config, scenario=sc)
     if a.resume and (a.field or a.q_table):
         raise UserError("--resume continues one robot from its checkpoint: leave out --field and --q-table")
-    from .durable_args import durable_options
-
     a.durable = durable_options(a, "pepper", sc, a.intention == "bayes")
 
 

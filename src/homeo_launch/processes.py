@@ -171,24 +171,3 @@ def _signal(p: subprocess.Popen, sig: int) -> None:
         os.killpg(p.pid, sig)  # the node's whole session: nothing it started survives
     except (ProcessLookupError, PermissionError):
         pass
-
-
-def add_graph_options(p) -> None:
-    """``--namespace`` and ``--no-auth``, shared by ``sim`` and ``pepper``."""
-    p.add_argument("--namespace", type=_namespace_arg, default="", metavar="NS",
-                   help="put the whole graph (nodes, topics, services) under /NS, so several robots share a domain")
-    p.add_argument("--data-dir", metavar="DIR", default="out",
-                   help="files the nodes read or write by parameter (Q-tables, models, traces) live here; a "
-                        "file option naming a place outside it is refused (default out)")
-    p.add_argument("--no-auth", action="store_true",
-                   help="do not sign the graph's messages: for debugging with ros2 topic pub; anyone on the "
-                        "domain can then steer the robot (docs/SECURITY.md)")
-
-
-def _namespace_arg(text: str) -> str:
-    import argparse
-
-    try:
-        return check_namespace(text)
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None

@@ -17,11 +17,12 @@ import json
 import sys
 
 from homeo_msgs_py.cli_args import float_in, int_at_least, setting
-from homeo_msgs_py.graph import BAYES, INTENTION_MODES, SEED_MAX, TICKS_MAX
+from homeo_msgs_py.graph import BAYES, INTENTION_MODES, TICKS_MAX
 from homeo_msgs_py.learning import DOD, PSEUDO_UPDATE, XI, add_learning_flags, add_no_pseudo_flag, learning_values
 from homeo_msgs_py.params import add_flag
 
-from .launch import PROG, GraphOptions, check_files, close_sinks, open_sinks, run_graph
+from .launch import PROG, GraphOptions, run_graph
+from .options import add_run_options, check_files, close_sinks, durable_options, open_sinks
 
 LAUNCH_LEARNING = (DOD, XI, PSEUDO_UPDATE)  # the decision's learning parameters a launch sets
 HELP = {"sim": "the graph with the simulated world and human; prints Table 4.5's metrics",
@@ -29,42 +30,27 @@ HELP = {"sim": "the graph with the simulated world and human; prints Table 4.5's
 
 
 def add_parser(sub, name: str, world_cls) -> None:
-    from .durable_args import add_durable_options
-    from .live_args import add_live_options
-    from .processes import add_graph_options
-
     s = sub.add_parser(name, help=HELP.get(name, f"the graph with the {name!r} world of the registry"))
     s.add_argument("--iterations", type=int_at_least(0, TICKS_MAX), default=5000, help="ticks (0 = until Ctrl-C; default 5000)")
     s.add_argument("--rate", type=float_in(0.0, 1000.0), default=0.0, help="ticks per second (0 = as fast as lockstep allows)")
-    s.add_argument("--seed", type=int_at_least(0, SEED_MAX), default=0, help="seed of every component (default 0)")
     add_learning_flags(s, LAUNCH_LEARNING, help_extra=" (default: the scenario's)")
     add_no_pseudo_flag(s)
     s.add_argument("--intention", choices=INTENTION_MODES, default=BAYES,
                    help="recognise the intention with the Bayesian network (default) or observe it (the thesis's "
                         "simulation; what homeo-sim run does by default)")
-    s.add_argument("--scenario", metavar="FILE", default=None, help="scenario JSON (default: the thesis scenario)")
     s.add_argument("--set", metavar="KEY=VALUE", type=setting, action="append", default=[],
                    help="override an open choice of the scenario")
     s.add_argument("--load-q", metavar="FILE", help="start from a saved Q-table")
     s.add_argument("--save-q", metavar="FILE", help="save the Q-table at the end")
     s.add_argument("--trace", metavar="FILE", help="the world writes one JSON line per tick")
-    s.add_argument("--action-timeout", type=float_in(0.01, 3600.0), default=5.0,
-                   help="seconds to wait for an action before the tick counts as none (default 5)")
     for spec in world_cls.PARAMS:  # the world's own parameters (default: the node's)
         add_flag(s, spec)
-    s.add_argument("--log-dir", metavar="DIR", help="keep each node's log here (default: a temporary directory)")
-    s.add_argument("--json", action="store_true", help="print the metrics as homeo-sim run --json does")
-    s.add_argument("--quiet", action="store_true", help="no progress bar")
-    add_live_options(s)
-    add_graph_options(s)
-    add_durable_options(s, name)
+    add_run_options(s, name)
     s.set_defaults(world=name, world_params=tuple(p.name for p in world_cls.PARAMS))
 
 
 def options_from_args(a) -> GraphOptions:
     from homeo_decision.scenario import load_scenario
-
-    from .durable_args import durable_options
 
     check_files(a, read=[("--load-q", a.load_q)], write=[("--save-q", a.save_q), ("--trace", a.trace)])
     if getattr(a, "record", None):
