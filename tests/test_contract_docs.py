@@ -21,3 +21,12 @@ def test_fidelity_md_has_the_open_choices_table_of_the_declaration():
     text = (DOCS / "FIDELITY.md").read_text()
     assert table() in text, "regenerate: homeo_decision.scenario.open_choices.table()"
     assert all(f"| `{n}` |" in table() for n in NAMES)
+
+
+def test_architecture_md_has_the_generated_parameter_tables():
+    from homeo_decision.world_api import tables
+    from homeo_msgs_py.learning import table
+
+    text = (DOCS / "ARCHITECTURE.md").read_text()
+    assert table() in text, "regenerate: python -m homeo_msgs_py.learning"
+    assert tables() in text, "regenerate: python -m homeo_decision.world_api"

@@ -183,3 +183,21 @@ def world_class(name: str) -> type[WorldBackend]:
     if not (isinstance(cls, type) and issubclass(cls, WorldBackend)):
         raise WorldConfigError(f"world {name!r} ({eps[name].value}) is not a WorldBackend")
     return cls
+
+
+def tables() -> str:
+    """The world node's parameters and each registered world's own, as docs/ARCHITECTURE.md shows them."""
+    from homeo_msgs_py.params import markdown_table
+
+    out = ["The world node's own (every world):", "", markdown_table(WORLD_PARAMS)]
+    for name in sorted(registered()):
+        cls = world_class(name)
+        out += ["", f"`{name}` (`{cls.__module__}.{cls.__name__}`):", "",
+                markdown_table(cls.PARAMS) if cls.PARAMS else "(none of its own)"]
+    return "\n".join(out)
+
+
+if __name__ == "__main__":  # python -m: the classes must be this module's, not __main__'s
+    from homeo_decision import world_api
+
+    print(world_api.tables())

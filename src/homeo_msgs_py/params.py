@@ -67,8 +67,9 @@ class ParamSpec:
             return " | ".join(self.choices)
         if self.lo is None and self.hi is None:
             return ""
-        lo = "-inf" if self.lo is None else f"{self.lo:g}"
-        hi = "inf" if self.hi is None else f"{self.hi:g}"
+        shown = (lambda x: str(int(x))) if self.kind is int else (lambda x: f"{x:g}")
+        lo = "-inf" if self.lo is None else shown(self.lo)
+        hi = "inf" if self.hi is None else shown(self.hi)
         return f"[{lo}, {hi}]"
 
     def parse(self, text: str):
