@@ -59,7 +59,7 @@ def test_config_errors_name_the_file_and_the_key(thesis, mutate, key):
 def test_config_file_errors_are_one_line(tmp_path, thesis):
     f = tmp_path / "pepper.json"
     f.write_text("{not json")
-    with pytest.raises(ConfigError, match=r"pepper\.json: not valid JSON \(line 1"):
+    with pytest.raises(ConfigError, match=r"pepper\.json: corrupt config \(not JSON: .* at line 1\)"):
         load_config(f, scenario=thesis)
     with pytest.raises(ConfigError, match="config file not found"):
         load_config(tmp_path / "missing.json", scenario=thesis)

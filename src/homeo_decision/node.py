@@ -24,7 +24,6 @@ import sys
 from pathlib import Path
 
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
-from std_srvs.srv import Trigger
 
 from homeo_msgs_py.graph import NODES
 from homeo_msgs_py.data_dir import OutsideDataDir
@@ -73,9 +72,9 @@ class DecisionNode(durable.CheckpointedNode, ScenarioNode):
 
         self.pub = self.robot_publisher("action")
         self.subscribe("drives", lambda m: self._put("drives", m))
-        self.create_service(Trigger, "~/save_q", self._on_save)
-        self.create_service(Trigger, "~/load_q", self._on_load)
-        self.create_service(Trigger, "~/reset", self._on_reset)
+        self.trigger("~/save_q", self._save)
+        self.trigger("~/load_q", self._load)
+        self.trigger("~/reset", self._reset)
 
     # -- parameters ---------------------------------------------------------------------
     def _on_params(self, params) -> SetParametersResult:
@@ -144,28 +143,20 @@ class DecisionNode(durable.CheckpointedNode, ScenarioNode):
             msg += f"; dropped: {', '.join(rep.dropped)}"
         return True, msg
 
-    def _on_load(self, request, response):
-        response.success, response.message = self._load()
-        return response
-
-    def _on_save(self, request, response):
+    def _save(self) -> tuple[bool, str]:
         if not self.q_path:
-            response.success, response.message = False, "q_table_path is not set"
-            return response
+            return False, "q_table_path is not set"
         c = self.core
         try:
             qtable_io.save(c.q, self.q_path, meta={"node": self.get_name(), **c.params(), SEED.name: c.seed})
         except qtable_io.QTableError as exc:  # a directory, a read-only place, a full disk
-            response.success, response.message = False, str(exc)
-            return response
-        response.success, response.message = True, f"saved {self.q_path}"
-        return response
+            return False, str(exc)
+        return True, f"saved {self.q_path}"
 
-    def _on_reset(self, request, response):
+    def _reset(self) -> tuple[bool, str]:
         self.core.reset()
         self.host.decision.restart()
-        response.success, response.message = True, f"Q-table cleared, decision stream reseeded with {self.core.seed}"
-        return response
+        return True, f"Q-table cleared, decision stream reseeded with {self.core.seed}"
 
 
 def main(args=None) -> int:

@@ -23,7 +23,6 @@ import sys
 import time
 
 from rcl_interfaces.msg import SetParametersResult
-from std_srvs.srv import Trigger
 
 from homeo_msgs_py.data_dir import OutsideDataDir
 from homeo_msgs_py.graph import NODES, WORLD, readers
@@ -78,7 +77,7 @@ class WorldNode(durable.DurableWorld, ScenarioNode):
         self.subscribe("action", self.driver.on_action)
         for key, handler in self.world.inputs().items():
             self.subscribe_text(key, handler)
-        self.create_service(Trigger, "~/reset", self._on_reset)
+        self.trigger("~/reset", self._reset)
         self._wait_logged = self._status_at = 0.0
         self._status_key = None
         self.create_timer(POLL_S, self._poll)
@@ -181,18 +180,15 @@ class WorldNode(durable.DurableWorld, ScenarioNode):
     def extra_statuses(self) -> list[dict]:
         return [*self.world.diagnostics(), *durable.DurableWorld.extra_statuses(self)]
 
-    def _on_reset(self, request, response):
+    def _reset(self) -> tuple[bool, str]:
         seed = self.get_parameter("seed").value
         try:
             trace = self._open_trace(self.get_parameter("trace_path").value)
         except NodeConfigError as exc:
-            response.success, response.message = False, str(exc)
-            return response
+            return False, str(exc)
         self.host.reset(seed, trace)
         self.checkpoints.save()  # a restart from here goes on with the new run, not the old one
-        response.success = True
-        response.message = f"run {self.driver.run} starts from tick 0 with seed {seed}"
-        return response
+        return True, f"run {self.driver.run} starts from tick 0 with seed {seed}"
 
     # -- checkpoints and the rejoin of a respawned node (durable.DurableWorld) -------------------------
     def world_checkpoint(self) -> dict:

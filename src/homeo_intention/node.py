@@ -20,7 +20,6 @@ import sys
 from pathlib import Path
 
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
-from std_srvs.srv import Trigger
 
 from homeo_decision import checkpoint, durable
 from homeo_decision.node_runtime import ScenarioNode, run_scenario_node
@@ -71,8 +70,8 @@ class IntentionNode(durable.CheckpointedNode, ScenarioNode):
         self.pub = self.robot_publisher("intention")
         for i in DESC.reads(self.part.learns):
             self.subscribe(i.topic, lambda m, key=i.topic: self._put(key, m))
-        self.create_service(Trigger, "~/save_model", self._on_save)
-        self.create_service(Trigger, "~/load_model", self._on_load)
+        self.trigger("~/save_model", self._save)
+        self.trigger("~/load_model", self._load)
 
     def _put(self, key, msg) -> None:
         if key == "observation":
@@ -127,23 +126,15 @@ class IntentionNode(durable.CheckpointedNode, ScenarioNode):
             return False, str(exc)
         return True, f"loaded {path}"
 
-    def _on_load(self, request, response):
-        response.success, response.message = self._load()
-        return response
-
-    def _on_save(self, request, response):
+    def _save(self) -> tuple[bool, str]:
         path = self._path()
         if not self.part.learns or not path:
-            response.success = False
-            response.message = "the oracle has no model" if not self.part.learns else "model_path is not set"
-            return response
+            return False, "the oracle has no model" if not self.part.learns else "model_path is not set"
         try:
             self.part.model.save(path, meta={"node": self.get_name()})
         except (ValueError, OSError) as exc:
-            response.success, response.message = False, str(exc)
-            return response
-        response.success, response.message = True, f"saved {path}"
-        return response
+            return False, str(exc)
+        return True, f"saved {path}"
 
 
 def main(args=None) -> int:

@@ -248,6 +248,17 @@ class HomeoNode(Node):
         where[0] = sub.topic_name
         return sub
 
+    def trigger(self, name: str, answer: Callable[[], tuple[bool, str]]):
+        """A ``std_srvs/Trigger`` service (``~/save_q``, ``~/reset``...) answered by ``answer()``:
+        (success, message)."""
+        from std_srvs.srv import Trigger
+
+        def cb(request, response):
+            response.success, response.message = answer()
+            return response
+
+        return self.create_service(Trigger, name, cb)
+
     # -- the start gate -------------------------------------------------------------------
     def gate_missing(self, pubs: dict, want: Callable[[str], int], inputs) -> list[str]:
         """What a world node still waits for before tick 0: for each publisher (key -> GatedPublisher)

@@ -22,7 +22,6 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from homeo_decision.environment import Outcome
 from homeo_decision.scenario import NONE_INTENTION, Scenario
 from homeo_decision.world_api import WorldConfigError
 from homeo_msgs_py.params import ParamSpec
@@ -130,15 +129,9 @@ class DayHuman(SimHuman):
         elif self.satisfied:  # granted: nothing more until the next moment
             self.intention, self.satisfied = 0, False
 
-    def respond(self, action: int) -> Outcome:
-        it = self.intention
-        if it == 0:
-            return Outcome(action, 0, None, None, None, 0, False)
-        if action in self.desired[it]:
-            self.satisfied = True
-            return Outcome(action, 1, None, it if self.reveal == "feedback" else None, None, it, True)
-        proposal = self.desired_order[it][0]
-        return Outcome(action, -1, proposal, it if self.reveal != "never" else None, None, it, False)
+    def proposal(self, it: int) -> int:
+        """A written person always says what it meant: the first desired action."""
+        return self.desired_order[it][0]
 
     def state(self) -> dict:
         return dict(super().state(), t=self.t, done=self.done)

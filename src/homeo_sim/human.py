@@ -99,20 +99,24 @@ class SimHuman:
         if action in self.desired[it]:
             self.satisfied = True
             return Outcome(action, 1, None, it if self.reveal == "feedback" else None, None, it, True)
-        proposal = None
-        if self.rng.random() < self.p_propose:
-            options = self.desired_order[it]
-            rule = self.proposal_choice
-            if len(options) == 1 or rule == "first":
-                proposal = options[0]
-            elif rule == "random":
-                proposal = options[self.rng.index(len(options))]
-            else:
-                named = self.sc.c.action_ids[rule]
-                proposal = named if named in options else options[0]
+        proposal = self.proposal(it)
         # a proposal names a desired action, so it tells the robot what the human meant
         clarified = it if proposal is not None and self.reveal != "never" else None
         return Outcome(action, -1, proposal, clarified, None, it, False)
+
+    def proposal(self, it: int) -> int | None:
+        """Line 17: the desired action the human proposes after scolding a miss (None: it says
+        nothing more), by the open choices human_proposal_prob and human_proposal_choice."""
+        if self.rng.random() >= self.p_propose:
+            return None
+        options = self.desired_order[it]
+        rule = self.proposal_choice
+        if len(options) == 1 or rule == "first":
+            return options[0]
+        if rule == "random":
+            return options[self.rng.index(len(options))]
+        named = self.sc.c.action_ids[rule]
+        return named if named in options else options[0]
 
     def observe(self, with_intention: bool = False) -> dict:
         """What the robot sees of the human this tick: one symbol per channel (and, for the

@@ -124,16 +124,10 @@ class PepperConfig:
 
 def load_config(path: str | Path | None = None, scenario=None) -> PepperConfig:
     """Read and check a config file; with ``scenario`` also that its names exist there."""
+    from homeo_decision.jsonfile import read
+
     p = Path(path) if path is not None else default_config_path()
-    try:
-        raw = json.loads(p.read_text())
-    except FileNotFoundError:
-        raise ConfigError(f"config file not found: {p}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"cannot read config {p}: {exc}") from None
-    except json.JSONDecodeError as exc:
-        raise ConfigError(f"{p}: not valid JSON (line {exc.lineno}: {exc.msg})") from None
-    cfg = config_from_dict(raw, str(p))
+    cfg = config_from_dict(read(p, ConfigError, "config"), str(p))
     if scenario is not None:
         check_scenario(cfg, scenario)
     return cfg

@@ -27,6 +27,15 @@ def _plt():
     return plt
 
 
+def _finish(plt, fig, path, title: str | None = None) -> None:
+    """Title, lay out, write the PNG, and free the figure (a report draws many)."""
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def _band(arr: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Mean and 95% t-interval over seeds (rows), NaN-aware."""
     n = np.sum(~np.isnan(arr), axis=0)
@@ -76,10 +85,7 @@ def _figures(out: Path, sc, R: dict, M: dict, d: dict) -> None:
         ax.set_xlabel("iteration")
     for ax in list(axes.flat)[len(names):]:
         ax.axis("off")
-    fig.suptitle(f"Fig 4.1: drives over time ({len(base)} seeds)")
-    fig.tight_layout()
-    fig.savefig(out / "fig4_1_drives.png", dpi=110)
-    plt.close(fig)
+    _finish(plt, fig, out / "fig4_1_drives.png", f"Fig 4.1: drives over time ({len(base)} seeds)")
 
     # Fig 4.2: HSR and RSR over time
     fig, axes = plt.subplots(1, 2, figsize=(11, 4))
@@ -94,10 +100,7 @@ def _figures(out: Path, sc, R: dict, M: dict, d: dict) -> None:
         ax.set_xlabel("iteration")
         ax.set_title({"HSR": "(a) Human Satisfaction Rate", "RSR": "(b) Robot Secure Rate"}[k])
         ax.legend(fontsize=8, loc="lower right")
-    fig.suptitle("Fig 4.2: cumulative HSR and RSR")
-    fig.tight_layout()
-    fig.savefig(out / "fig4_2_hsr_rsr.png", dpi=110)
-    plt.close(fig)
+    _finish(plt, fig, out / "fig4_2_hsr_rsr.png", "Fig 4.2: cumulative HSR and RSR")
 
     fig_xi(out / "fig4_3_xi.png", d["sweeps"][XI_SWEEP], st)
     other = st["pseudo_unaffected_drive"] if st else None
@@ -122,9 +125,7 @@ def _figures(out: Path, sc, R: dict, M: dict, d: dict) -> None:
     ax.set_ylim(0, 1.05)
     ax.legend(fontsize=8)
     ax.set_title(f"Policies after {d['iterations']} iterations (mean, 95% interval)")
-    fig.tight_layout()
-    fig.savefig(out / "baselines.png", dpi=110)
-    plt.close(fig)
+    _finish(plt, fig, out / "baselines.png")
 
     fig, axes = plt.subplots(1, 2, figsize=(11, 4))
     for ax, k, lvl in zip(axes, ("wHSR", "wRSR"), (LEARN_HSR, LEARN_RSR)):
@@ -135,10 +136,8 @@ def _figures(out: Path, sc, R: dict, M: dict, d: dict) -> None:
         ax.set_xlabel("iteration")
         ax.set_title(f"{k[1:]} over the last {LEARNING_WINDOW} iterations")
     axes[0].legend(fontsize=7, loc="lower right")
-    fig.suptitle("Learning speed: moving-window rates (dotted: the levels of the learning-speed measure)")
-    fig.tight_layout()
-    fig.savefig(out / "baselines_learning.png", dpi=110)
-    plt.close(fig)
+    _finish(plt, fig, out / "baselines_learning.png",
+            "Learning speed: moving-window rates (dotted: the levels of the learning-speed measure)")
 
     # adaptive DoD
     fig, axes = plt.subplots(1, 2, figsize=(11, 4))
@@ -168,9 +167,7 @@ def _figures(out: Path, sc, R: dict, M: dict, d: dict) -> None:
     ax.set_ylabel("HSR")
     ax.set_title("Fixed DoD (labels) vs adaptive")
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(out / "adaptive_dod.png", dpi=110)
-    plt.close(fig)
+    _finish(plt, fig, out / "adaptive_dod.png")
 
 
 def _err(s: dict) -> list:
@@ -204,10 +201,7 @@ def fig_xi(path: Path, points: list, statements: dict | None = None) -> None:
     for ax in axes:
         ax.set_xlabel("motivation factor xi")
         ax.legend(fontsize=8)
-    fig.suptitle("Fig 4.3: effect of the motivation factor (mean, 95% interval)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _finish(plt, fig, path, "Fig 4.3: effect of the motivation factor (mean, 95% interval)")
 
 
 def fig_dod(path: Path, points: list, names: Sequence[str], statements: dict | None = None) -> None:
@@ -231,10 +225,7 @@ def fig_dod(path: Path, points: list, names: Sequence[str], statements: dict | N
         ax.set_title(f"({lab}) {k}")
         ax.set_xlabel("Degree of Dedication")
         ax.legend(fontsize=7)
-    fig.suptitle("Fig 4.5: effect of the Degree of Dedication (mean, 95% interval)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _finish(plt, fig, path, "Fig 4.5: effect of the Degree of Dedication (mean, 95% interval)")
 
 
 def fig_pseudo(path: Path, on: Sequence[JobResult], off: Sequence[JobResult], serving: str, until: int | None = None,
@@ -259,8 +250,5 @@ def fig_pseudo(path: Path, on: Sequence[JobResult], off: Sequence[JobResult], se
     axes.flat[0].legend(fontsize=8)
     for ax in list(axes.flat)[len(panels):]:
         ax.axis("off")
-    fig.suptitle("Fig 4.4: effect of the pseudo update" + (f", first {until} iterations" if until else "")
-                 + f" ({len(on)} seeds, 95% bands)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _finish(plt, fig, path, "Fig 4.4: effect of the pseudo update" + (f", first {until} iterations" if until else "")
+            + f" ({len(on)} seeds, 95% bands)")
