@@ -55,3 +55,17 @@ def test_trace_is_reproducible(tmp_path):
     run_episode(RunConfig(iterations=100, seed=7, trace=str(b)))
     assert a.read_text() == b.read_text()
     assert len(a.read_text().splitlines()) == 100
+
+
+def test_float_sums_are_the_same_bits_on_python_3_11_and_3_12():
+    """Python 3.12's ``sum`` compensates rounding; 3.11's adds left to right. The core sums left to
+    right on both (``homeo_decision.numeric.left_sum``), so a seed's run prints the same numbers:
+    1e16 + 1 rounds back to 1e16 (the spacing of doubles there is 2), so the sum is 0, not 1."""
+    from homeo_decision.numeric import left_sum
+    from homeo_decision.objectq import softmax_probs
+    from homeo_sim.stats import describe
+
+    assert left_sum([1e16, 1.0, -1e16]) == 0.0
+    assert describe([1e16, 1.0, -1e16])["mean"] == 0.0
+    p = softmax_probs([0.0, -1e-300, 0.0], 1.0)
+    assert p == [1 / left_sum([1.0, 1.0, 1.0])] * 3

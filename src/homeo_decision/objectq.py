@@ -13,6 +13,7 @@ from itertools import accumulate
 from dataclasses import dataclass
 from typing import Sequence
 
+from .numeric import left_sum
 from .scenario import Scenario
 
 
@@ -40,7 +41,7 @@ def softmax_probs(values: Sequence[float], tau: float) -> list[float]:
     """Eq 3.17: P(a) = exp(Q(a)/tau) / sum exp(Q/tau), shifted by the max against overflow."""
     top = max(values)
     ex = [math.exp((v - top) / tau) for v in values]
-    z = sum(ex)
+    z = left_sum(ex)
     return [e / z for e in ex]
 
 

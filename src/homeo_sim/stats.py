@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from typing import Sequence
 
+from homeo_decision.numeric import left_sum
 from homeo_msgs_py.schemas import finite
 
 # two-sided 95% Student-t quantiles t_{0.975, df} for df = 1..30; beyond that 1.96 is close enough
@@ -26,9 +27,9 @@ def describe(values: Sequence[float]) -> dict:
     n = len(xs)
     if n == 0:
         raise ValueError("no values to describe")
-    mean = sum(xs) / n
+    mean = left_sum(xs) / n
     if n > 1:
-        sd = math.sqrt(sum((x - mean) ** 2 for x in xs) / (n - 1))
+        sd = math.sqrt(left_sum((x - mean) ** 2 for x in xs) / (n - 1))
         h = t975(n - 1) * sd / math.sqrt(n)
     else:
         h = 0.0

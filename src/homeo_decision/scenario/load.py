@@ -13,6 +13,7 @@ from typing import Any, Mapping, Sequence
 
 from homeo_msgs_py.learning import DOD, LEARNING, check_learning
 
+from ..numeric import left_sum
 from .compile import _compile
 from .open_choices import Names, parse_open
 from .model import (HUMAN_VARS, NONE_INTENTION, NULL_OBJECT, OBS_CHANNELS, PRESENCE, RELATIONS, DISTANCES, SCHEMA,
@@ -312,7 +313,7 @@ def _parse_observations(obs: Any, intention_names: list, where: str) -> Observat
                 raise ScenarioError(f"{dctx}: unknown symbol {sym!r}; known: {', '.join(symbols)}")
             if not isinstance(p, (int, float)) or isinstance(p, bool) or not 0.0 <= p <= 1.0:
                 raise ScenarioError(f"{dctx}.{sym} = {p!r} must be a probability in [0, 1]")
-        total = float(sum(spec.values()))
+        total = left_sum(float(v) for v in spec.values())
         rest = [s for s in symbols if s not in spec]
         if total > 1.0 + 1e-9:
             raise ScenarioError(f"{dctx}: probabilities sum to {total:g}, more than 1")
