@@ -25,10 +25,10 @@ def _launch(*args, cwd=None):
     (("sim", "--seed", "9" * 5000), ["--seed", "is not an integer"]),
     (("sim", "--namespace", "1r"), ["not a ROS name"]),
     (("sim", "--namespace", "r/../x"), ["not a ROS name"]),
-    (("sim", "--save-q", "/tmp/q.json"), ["outside the data directory", "--data-dir"]),
-    (("sim", "--trace", "../t.jsonl"), ["outside the data directory"]),
+    (("sim", "--load-q", "/etc/hostname"), ["/etc/hostname", "not JSON"]),
+    (("sim", "--trace", "/proc/x/t.jsonl"), ["--trace", "/proc/x"]),
     (("sim", "--log-dir", "/proc/nope"), ["--log-dir"]),
-    (("pepper", "--standin", "--q-table", "/etc/hostname"), ["outside the data directory"]),
+    (("pepper", "--standin", "--q-table", "/etc/hostname"), ["/etc/hostname", "not JSON"]),
     (("pepper", "--standin", "--seed", -1), ["below the minimum 0"]),
 ])
 def test_a_bad_option_is_one_line_and_exit_2(tmp_path, args, words):

@@ -37,21 +37,27 @@ FAST = settings(max_examples=300, deadline=None, suppress_health_check=[HealthCh
 
 
 @FAST
-@given(path=st.text(max_size=40) | st.sampled_from(["../x", "a/../../x", "/etc/passwd", "link/x", "sub/x"]))
-@example(path="/\n")  # found by CI: the refusal's reason was two lines
-def test_a_path_parameter_resolves_inside_the_data_dir_or_is_refused(tmp_path, path):
+@given(path=st.text(max_size=40) | st.sampled_from(["../x", "a/../../x", "/etc/passwd", "link/x", "sub/x", "~/x"]),
+       trusted=st.booleans())
+@example(path="/\n", trusted=False)  # found by CI: the refusal's reason was two lines
+def test_a_path_parameter_resolves_inside_the_data_dir_or_is_refused(tmp_path, path, trusted):
+    """A path set while the node runs (over the network) lies inside the data directory or is refused;
+    one the node started with (``trusted``: the user's command line) may lie anywhere, a relative one
+    under the data directory."""
     base = tmp_path / "out"
     (base / "sub").mkdir(parents=True, exist_ok=True)
     if not (base / "link").exists():
         (base / "link").symlink_to(tmp_path)
     try:
-        full = resolve(str(base), path, "q_table_path")
+        full = resolve(str(base), path, "q_table_path", trusted)
     except OutsideDataDir as exc:
-        assert "\n" not in str(exc)
+        assert "\n" not in str(exc) and (not trusted or "\0" in path)
         return
     real = os.path.realpath(base)
     if not path:
         assert full == ""
+    elif trusted:
+        assert full == os.path.realpath(os.path.join(real, os.path.expanduser(path)))
     else:
         assert os.path.commonpath([real, full]) == real and full != real
 
@@ -336,13 +342,18 @@ def test_the_trials_files_in_the_repo_are_read_whole():
 
 # -- issue 14: recording at the writers ------------------------------------------------------------
 @FAST
-@given(folder=st.text(max_size=40) | st.sampled_from(["../x", "/etc", "spool", "spool/../spool", "file", "gone", "\0"]))
-def test_the_record_spool_parameter_opens_a_spool_in_the_data_dir_or_is_refused(tmp_path, folder):
+@given(folder=st.text(max_size=40) | st.sampled_from(["../x", "{elsewhere}", "spool", "spool/../spool", "file", "gone",
+                                                     "\0"]))
+def test_the_record_spool_parameter_opens_a_spool_or_is_refused(tmp_path, folder):
+    """The spool folder is set when the node starts (by its launcher): any existing folder will do,
+    a relative one under the data directory; anything else is one line."""
     from homeo_msgs_py.node_base import open_spool
 
     base = tmp_path / "out"
     (base / "spool").mkdir(parents=True, exist_ok=True)
     (base / "file").write_text("")
+    (tmp_path / "elsewhere").mkdir(exist_ok=True)
+    folder = folder.replace("{elsewhere}", str(tmp_path / "elsewhere"))
     try:
         w = open_spool(str(base), folder, "homeo_drives")
     except NodeConfigError as exc:
@@ -352,8 +363,7 @@ def test_the_record_spool_parameter_opens_a_spool_in_the_data_dir_or_is_refused(
         assert w is None
         return
     try:
-        real = os.path.realpath(base)
-        assert os.path.commonpath([real, str(w.path)]) == real and w.path.parent.is_dir()
+        assert w.path.parent == Path(os.path.realpath(os.path.join(base, folder))) and w.path.parent.is_dir()
     finally:
         w.close()
         w.path.unlink()

@@ -131,17 +131,11 @@ def test_the_merged_bag_reads_back_with_an_independent_reader(tmp_path):
 
 
 @pytest.mark.ros
-def test_a_node_refuses_a_spool_folder_outside_its_data_directory_on_one_line(tmp_path):
+def test_a_node_refuses_a_spool_folder_it_cannot_open_on_one_line(tmp_path):
     from rosgraph import fresh_domain
 
     from homeo_launch.processes import graph_env
 
-    r = subprocess.run([sys.executable, "-m", "homeo_decision.drives_node", "--ros-args", "-p",
-                        f"data_dir:={tmp_path}", "-p", "record_spool:=/etc"], env=graph_env(fresh_domain()),
-                       capture_output=True, text=True, timeout=60)
-    assert r.returncode == 2, r.stderr
-    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
-    assert lines == ["error: record_spool /etc is outside the data directory " + str(tmp_path.resolve())], r.stderr
     r = subprocess.run([sys.executable, "-m", "homeo_decision.drives_node", "--ros-args", "-p",
                         f"data_dir:={tmp_path}", "-p", "record_spool:=gone"], env=graph_env(fresh_domain()),
                        capture_output=True, text=True, timeout=60)

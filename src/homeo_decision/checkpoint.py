@@ -163,6 +163,19 @@ def decision_checkpoint(core, ticks: int, run: int, session: str = "") -> dict:
                     qtable_io.to_dict(core.q), session)
 
 
+def load_table(q: ObjectQ, path: str | Path) -> qtable_io.LoadReport:
+    """Load a Q-table into ``q`` from a Q-table file (``--save-q``, ``~/save_q``) or from the decision
+    node's checkpoint, which holds its table (a user reaches for it first after a long graph run).
+    QTableError (one line) for anything else, a checkpoint of another node among them."""
+    raw = jsonfile.read(path, qtable_io.QTableError, "Q-table")
+    if isinstance(raw, dict) and raw.get("schema") == SCHEMA:
+        try:
+            raw = check_envelope(raw, "homeo_decision", str(path))["state"]
+        except CheckpointError as exc:
+            raise qtable_io.QTableError(f"{exc}: it holds no Q-table") from None
+    return qtable_io.from_dict(q, raw, str(path))
+
+
 def decision_learned(core) -> dict:
     """What the decision has learned: its table and where its random stream stands."""
     return {"q": core.q.q, "rng": core.rng.state()}

@@ -42,7 +42,7 @@ def declare(node) -> dict:
     }
     for key in ("checkpoint_dir", "resume_dir"):
         try:
-            cfg[key] = node.data_path(cfg[key], key)
+            cfg[key] = node.data_path(cfg[key], key, trusted=True)  # set at start only
         except OutsideDataDir as exc:
             raise NodeConfigError(str(exc)) from None
     return cfg

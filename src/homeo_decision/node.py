@@ -47,18 +47,21 @@ class DecisionNode(durable.CheckpointedNode, ScenarioNode):
         self.declare_parameter("q_table_path", "", ParameterDescriptor(description="Q-table file of ~/save_q, ~/load_q"))
         self.declare_fixed("load_on_start", False, ParameterDescriptor(
             description="load q_table_path when the node starts"))
+        self.declare_fixed("start_from", "", ParameterDescriptor(
+            description="a Q-table file, or a decision checkpoint, to start from ('' = none); set at start"))
         p = lambda n: self.get_parameter(n).value  # noqa: E731
         self.core = DecisionCore(self.sc, seed, **learning)
         self.host = DecisionHost(self.sc, self.core)
         try:
-            self.q_path = self.data_path(p("q_table_path"), "q_table_path")
+            self.q_path = self.data_path(p("q_table_path"), "q_table_path", trusted=True)  # its start value
         except OutsideDataDir as exc:
             raise NodeConfigError(str(exc)) from None
-        if p("load_on_start"):
-            ok, msg = self._load()
-            if not ok:
-                raise NodeConfigError(f"load_on_start: {msg}")
-            self.get_logger().info(msg)
+        for what, path in (("load_on_start", self.q_path if p("load_on_start") else ""), ("start_from", p("start_from"))):
+            if path:
+                ok, msg = self._load(self.data_path(path, what, trusted=True))
+                if not ok:
+                    raise NodeConfigError(f"{what}: {msg}")
+                self.get_logger().info(msg)
         self.durable = durable.declare(self)
         durable.setup_stage(self, self.host.stage, self.durable)
         self.ticks = 0  # ticks learned in all (the tick offset included)
@@ -73,7 +76,7 @@ class DecisionNode(durable.CheckpointedNode, ScenarioNode):
         self.pub = self.robot_publisher("action")
         self.subscribe("drives", lambda m: self._put("drives", m))
         self.trigger("~/save_q", self._save)
-        self.trigger("~/load_q", self._load)
+        self.trigger("~/load_q", lambda: self._load())
         self.trigger("~/reset", self._reset)
 
     # -- parameters ---------------------------------------------------------------------
@@ -127,16 +130,18 @@ class DecisionNode(durable.CheckpointedNode, ScenarioNode):
             self.checkpoints.after_tick(self.ticks)
 
     # -- services -------------------------------------------------------------------------
-    def _load(self) -> tuple[bool, str]:
-        if not self.q_path:
+    def _load(self, path: str | None = None) -> tuple[bool, str]:
+        """Load ``path`` (default: q_table_path): a Q-table file or a decision checkpoint."""
+        path = self.q_path if path is None else path
+        if not path:
             return False, "q_table_path is not set"
-        if not Path(self.q_path).is_file():
-            return False, f"Q-table file not found: {self.q_path}"
+        if not Path(path).is_file():
+            return False, f"Q-table file not found: {path}"
         try:
-            rep = qtable_io.load(self.core.q, self.q_path)
+            rep = checkpoint.load_table(self.core.q, path)
         except (qtable_io.QTableError, OSError) as exc:
             return False, str(exc)
-        msg = f"loaded {self.q_path}: {', '.join(rep.loaded)}"
+        msg = f"loaded {path}: {', '.join(rep.loaded)}"
         if rep.new:
             msg += f"; new objects start fresh: {', '.join(rep.new)}"
         if rep.dropped:

@@ -2,7 +2,9 @@
 
 Publishes  homeo/world (state), homeo/observation (event), homeo/outcome (event),
            homeo/run_status (state: progress; the world's metrics or log), homeo/device (event:
-           the world's device commands), /diagnostics (input health, checkpoints, the world's own)
+           the world's device commands), homeo/last_action (state, with a person in the loop: the
+           action being performed, for them to read), /diagnostics (input health, checkpoints,
+           the world's own)
 Subscribes homeo/action (tick k's action, with the robot's drives), and what the world reads from
            outside the graph (homeo/human_input, with the simulation's human:=person)
 Services   ~/reset (std_srvs/Trigger): a new run from tick 0 (the robot keeps what it learned)
@@ -65,7 +67,7 @@ class WorldNode(durable.DurableWorld, ScenarioNode):
             self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix=f"{v['world']}-io")
             run_async = self._pool.submit
         # a respawned node's trace goes on where its checkpoint left it (restore_world cuts it there)
-        trace = self._open_trace(v["trace_path"], keep=cfg["respawned"])
+        trace = self._open_trace(v["trace_path"], keep=cfg["respawned"], trusted=True)
         self.pubs = {key: self.publisher(key) for key in DESC.publishes}
         self.host = WorldHost(self.world, self._send, iterations=v["iterations"], rate=v["rate"],
                               timeout=v["action_timeout"], run_async=run_async, log=self._log, note=self.rejects.note,
@@ -77,6 +79,8 @@ class WorldNode(durable.DurableWorld, ScenarioNode):
         self.subscribe("action", self.driver.on_action)
         for key, handler in self.world.inputs().items():
             self.subscribe_text(key, handler)
+        if self.world.inputs():  # a person in the loop: what the robot does, latched for them to read
+            self.driver.on_act = self._announce
         self.trigger("~/reset", self._reset)
         self._wait_logged = self._status_at = 0.0
         self._status_key = None
@@ -84,6 +88,12 @@ class WorldNode(durable.DurableWorld, ScenarioNode):
 
     def _send(self, key: str, tick: int, fields: dict, run: int) -> None:
         self.send(self.pubs[key], tick, fields, run)
+
+    def _announce(self, tick: int, action: dict | None) -> None:
+        f = {"action": action.get("action")} if action else {"action": None}
+        if action:
+            f.update({k: action[k] for k in ("intention", "m_dom") if action.get(k) is not None})
+        self._send("last_action", tick, f, self.driver.run)
 
     def _log(self, text: str) -> None:
         if "retrying" in text:  # a robot that is away: once every 2 s is enough
@@ -114,9 +124,9 @@ class WorldNode(durable.DurableWorld, ScenarioNode):
                     return SetParametersResult(successful=False, reason=reason)
         return SetParametersResult(successful=True)  # seed and trace_path take effect at the next ~/reset
 
-    def _open_trace(self, path: str, keep: bool = False):
+    def _open_trace(self, path: str, keep: bool = False, trusted: bool = False):
         try:
-            path = self.data_path(path, "trace_path")
+            path = self.data_path(path, "trace_path", trusted)
         except OutsideDataDir as exc:
             raise NodeConfigError(str(exc)) from None
         if not path:
@@ -182,8 +192,8 @@ class WorldNode(durable.DurableWorld, ScenarioNode):
 
     def _reset(self) -> tuple[bool, str]:
         seed = self.get_parameter("seed").value
-        try:
-            trace = self._open_trace(self.get_parameter("trace_path").value)
+        try:  # the start value, or one set since (checked inside the data directory when it was set)
+            trace = self._open_trace(self.get_parameter("trace_path").value, trusted=True)
         except NodeConfigError as exc:
             return False, str(exc)
         self.host.reset(seed, trace)

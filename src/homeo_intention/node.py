@@ -44,7 +44,7 @@ class IntentionNode(durable.CheckpointedNode, ScenarioNode):
             description="load model_path when the node starts"))
         mode = self.get_parameter("mode").value
         try:
-            self.model_path = self.data_path(self.get_parameter("model_path").value, "model_path")
+            self.model_path = self.data_path(self.get_parameter("model_path").value, "model_path", trusted=True)
         except OutsideDataDir as exc:
             raise NodeConfigError(str(exc)) from None
         self.add_on_set_parameters_callback(self._on_params)

@@ -23,7 +23,7 @@ import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from homeo_decision import qtable_io
+from homeo_decision import checkpoint
 from homeo_decision.agent import DecisionCore
 from homeo_decision.robot import OracleRecognition, Robot, run_loop
 from homeo_decision.scenario import Scenario, load_scenario
@@ -48,7 +48,7 @@ def initial_drives(sc: Scenario, given: dict | None) -> list[float]:
 def make_robot(sc: Scenario, dod: float, seed: int, q_table: str | Path | None) -> Robot:
     core = DecisionCore(sc, seed, dod=dod)
     if q_table:
-        qtable_io.load(core.q, q_table)
+        checkpoint.load_table(core.q, q_table)
     return Robot(sc, core, OracleRecognition(sc))
 
 

@@ -68,11 +68,11 @@ def graph_specs(o: GraphOptions) -> list[NodeSpec]:
     common = {"scenario": o.scenario or "", "overrides": overrides_param(dict(o.overrides)),
               "data_dir": os.path.abspath(o.data_dir), "extra_readers": o.extra_readers}
     decision = dict(common, seed=o.seed, **o.learning)
-    q_path = o.load_q or o.save_q  # a different --save-q is set just before saving
+    q_path = o.save_q or o.load_q  # where ~/save_q writes (the user's own paths: anywhere)
     if q_path:
-        decision["q_table_path"] = os.path.abspath(q_path)
-    if o.load_q:
-        decision["load_on_start"] = True
+        decision["q_table_path"] = os.path.abspath(os.path.expanduser(q_path))
+    if o.load_q:  # a Q-table file or a decision checkpoint
+        decision["start_from"] = os.path.abspath(os.path.expanduser(o.load_q))
     world = dict(common, world=o.world, seed=o.seed, intention_learns=o.intention == BAYES, **o.world_params)
     params = {WORLD: world, "homeo_intention": dict(common, mode=o.intention), "homeo_drives": dict(common),
               "homeo_decision": decision}
@@ -244,31 +244,5 @@ def new_session() -> str:
 
 
 def save_q(mon: Monitor, o) -> tuple[bool, str]:
-    """Ask the decision node to save its table to ``--save-q`` (also on Ctrl-C)."""
-    ok, msg = True, ""
-    if o.load_q and o.save_q != o.load_q:
-        ok, msg = set_param(mon, "homeo_decision", "q_table_path", os.path.abspath(o.save_q))
-    if ok:
-        ok, msg = mon.call_trigger("homeo_decision/save_q", timeout=5.0)
-    return ok, msg
-
-
-def set_param(mon: Monitor, node: str, name: str, value) -> tuple[bool, str]:
-    from rcl_interfaces.srv import SetParameters
-    from rclpy.parameter import Parameter
-
-    cli = mon.node.create_client(SetParameters, f"{node}/set_parameters")
-    try:
-        if not cli.wait_for_service(timeout_sec=10.0):
-            return False, f"{node}/set_parameters is not available"
-        req = SetParameters.Request(parameters=[Parameter(name, value=value).to_parameter_msg()])
-        fut = cli.call_async(req)
-        end = time.monotonic() + 10.0
-        while not fut.done() and time.monotonic() < end:
-            mon.spin(0.05)
-        if not fut.done():
-            return False, "set_parameters did not answer"
-        r = fut.result().results[0]
-        return r.successful, r.reason
-    finally:
-        mon.node.destroy_client(cli)
+    """Ask the decision node to save its table to ``--save-q``, its q_table_path (also on Ctrl-C)."""
+    return mon.call_trigger("homeo_decision/save_q", timeout=5.0)

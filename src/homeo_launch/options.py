@@ -10,7 +10,7 @@ import argparse
 import os
 import sys
 
-from homeo_msgs_py.cli_args import UserError, float_in, int_at_least
+from homeo_msgs_py.cli_args import UserError, float_in, int_at_least, user_path
 from homeo_msgs_py.graph import SEED_MAX
 
 from .launch import PROG
@@ -20,10 +20,12 @@ def add_run_options(p, name: str, seed_help: str = "seed of every component (def
     """What every graph command takes: seed, scenario, action timeout, logs and output, the graph's
     options, the recorder and the live view, checkpoints and restarts."""
     p.add_argument("--seed", type=int_at_least(0, SEED_MAX), default=0, help=seed_help)
-    p.add_argument("--scenario", metavar="FILE", default=None, help="scenario JSON (default: the thesis scenario)")
+    p.add_argument("--scenario", metavar="FILE", type=user_path, default=None,
+                   help="scenario JSON (default: the thesis scenario)")
     p.add_argument("--action-timeout", type=float_in(0.01, 3600.0), default=5.0,
                    help="seconds to wait for the decision before a tick counts as no action (default 5)")
-    p.add_argument("--log-dir", metavar="DIR", help="keep each node's log here (default: a temporary directory)")
+    p.add_argument("--log-dir", metavar="DIR", type=user_path,
+                   help="keep each node's log here (default: a temporary directory)")
     p.add_argument("--json", action="store_true", help="print the run's result as JSON")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     add_graph_options(p)
@@ -35,9 +37,9 @@ def add_graph_options(p) -> None:
     """``--namespace`` and ``--no-auth``, shared by ``sim`` and ``pepper``."""
     p.add_argument("--namespace", type=_namespace_arg, default="", metavar="NS",
                    help="put the whole graph (nodes, topics, services) under /NS, so several robots share a domain")
-    p.add_argument("--data-dir", metavar="DIR", default="out",
-                   help="files the nodes read or write by parameter (Q-tables, models, traces) live here; a "
-                        "file option naming a place outside it is refused (default out)")
+    p.add_argument("--data-dir", metavar="DIR", type=user_path, default="out",
+                   help="the nodes' data directory (default out): relative file parameters resolve in it, and a "
+                        "path set while the graph runs (ros2 param set, a service) must lie in it")
     p.add_argument("--no-auth", action="store_true",
                    help="do not sign the graph's messages: for debugging with ros2 topic pub; anyone on the "
                         "domain can then steer the robot (docs/SECURITY.md)")
@@ -54,7 +56,8 @@ def _namespace_arg(text: str) -> str:
 
 def add_live_options(p) -> None:
     """--record and --foxglove: the launcher's tap and what it feeds."""
-    p.add_argument("--record", metavar="DIR", help="record every topic as a rosbag2 bag (MCAP) in this new folder")
+    p.add_argument("--record", metavar="DIR", type=user_path,
+                   help="record every topic as a rosbag2 bag (MCAP) in this new folder")
     p.add_argument("--record-from", choices=("writers", "tap"), default="writers",
                    help="writers (default): each node keeps what it sends, merged into the bag after the run (stamped "
                         "when sent; costs the tick a few microseconds a message); tap: the launcher subscribes to "
@@ -82,14 +85,14 @@ CHECKPOINT_ROOT = "checkpoints"  # under --data-dir
 
 def add_durable_options(p, graph: str) -> None:
     g = p.add_argument_group("checkpoints and restarts")
-    g.add_argument("--checkpoint-dir", metavar="DIR", default=None,
+    g.add_argument("--checkpoint-dir", metavar="DIR", type=user_path, default=None,
                    help=f"write the robot nodes' learned state here every --checkpoint-every ticks and at the end "
                         f"(inside --data-dir; default: DATA_DIR/{CHECKPOINT_ROOT}/NAMESPACE or {graph}, or the --resume "
                         f"folder)")
     g.add_argument("--checkpoint-every", metavar="N", type=int_at_least(1), default=100,
                    help="ticks between checkpoints (default 100)")
     g.add_argument("--no-checkpoints", action="store_true", help="write no checkpoints (a restarted node starts fresh)")
-    g.add_argument("--resume", metavar="DIR", default=None,
+    g.add_argument("--resume", metavar="DIR", type=user_path, default=None,
                    help="continue from the checkpoints in DIR: the Q-table, the intention model, the random "
                         "streams, and the learning schedule from the ticks learned")
     g.add_argument("--max-restarts", metavar="N", type=int_at_least(0), default=3,
@@ -100,9 +103,6 @@ def durable_options(a, graph: str, sc, bayes: bool) -> dict:
     """SimOptions fields from the arguments; a resume folder that cannot be used is a UserError."""
     if a.no_checkpoints and a.checkpoint_dir:
         raise UserError("--checkpoint-dir and --no-checkpoints contradict each other")
-    from homeo_msgs_py.data_dir import options_inside
-
-    options_inside(a.data_dir, [("--checkpoint-dir", a.checkpoint_dir), ("--resume", a.resume)])
     if a.resume and getattr(a, "load_q", None):
         raise UserError("--resume and --load-q: the checkpoint holds the Q-table; give one of them")
     if a.resume:
@@ -139,19 +139,29 @@ def check_resume(d: str, sc, bayes: bool) -> None:
         raise UserError(f"--resume: {exc}") from None
 
 
-def check_files(a, read=(), write=()) -> None:
-    """The file options of a launch, before anything starts: each inside ``--data-dir`` (the nodes
-    refuse any other place), the ones read existing, the ones written not a directory and in a
-    place that exists or can be made; ``--log-dir`` writable. Raises UserError (one line)."""
-    from homeo_msgs_py.data_dir import options_inside
-
-    options_inside(a.data_dir, [*read, *write])
-    for opt, f in read:
+def check_files(a, read=(), write=(), tables=(), sc=None) -> None:
+    """The file options of a launch, before anything starts: the ones read existing, the Q-tables
+    (``tables``) loading into the scenario ``sc`` (a Q-table file or a decision checkpoint), the ones
+    written not a directory and in a folder that exists or can be made; ``--log-dir`` writable.
+    Raises UserError (one line). They may lie anywhere: the user's own command line is trusted
+    (the data directory confines only what arrives over the network, ``homeo_msgs_py.data_dir``)."""
+    for opt, f in [*read, *tables]:
         if f and not os.path.isfile(f):
             raise UserError(f"{opt} {f}: file not found")
+    for opt, f in tables:
+        if f:
+            from homeo_decision.checkpoint import load_table
+            from homeo_decision.objectq import ObjectQ
+
+            load_table(ObjectQ(sc), f)  # QTableError: one line, exit 2
     for opt, f in write:
         if f and os.path.isdir(f):
             raise UserError(f"{opt} {f} is a directory, not a file")
+        if f:
+            try:
+                os.makedirs(os.path.dirname(os.path.abspath(os.path.expanduser(f))), exist_ok=True)
+            except OSError as exc:
+                raise UserError(f"{opt} {f}: {exc.strerror}") from None
     if getattr(a, "log_dir", None):
         try:
             os.makedirs(a.log_dir, exist_ok=True)

@@ -23,7 +23,7 @@ import tempfile
 from pathlib import Path
 
 from homeo_msgs_py import graph as G
-from homeo_msgs_py.cli_args import UserError, float_in, int_at_least
+from homeo_msgs_py.cli_args import UserError, float_in, int_at_least, user_path
 from homeo_msgs_py.learning import DOD, add_learning_flags
 from homeo_msgs_py.params import add_flag
 
@@ -125,9 +125,9 @@ def add_parser(subparsers) -> None:
     src.add_argument("--standin", action="store_true", help="start a stand-in Pepper on loopback (its own process)")
     p.add_argument("--connect-bound", type=float_in(0.5, 600.0), default=15.0,
                    help="seconds to wait for the robot at --qi-url before giving up with exit code 2 (default 15)")
-    p.add_argument("--script", metavar="FILE", help="the stand-in's scripted user (a path or a file of "
+    p.add_argument("--script", metavar="FILE", type=user_path, help="the stand-in's scripted user (a path or a file of "
                    "pepper_bridge/scripts/); its robot.drives are the initial drives")
-    p.add_argument("--q-table", metavar="FILE", help="the decision node loads this Q-table at start "
+    p.add_argument("--q-table", metavar="FILE", type=user_path, help="the decision node loads this Q-table at start "
                    "(with --field: one table for both robots)")
     add_learning_flags(p, (DOD,), help_extra=" (default: the scenario's)")
     p.add_argument("--intention", choices=tuple(INTENTION_MODES), default="cues",
@@ -144,9 +144,9 @@ def add_parser(subparsers) -> None:
                    "(default: continue in its last phase)")
     p.add_argument("--field", action="store_true", help="the field test: a dedicated (DoD 0.25) and a selfish (DoD 0) "
                    "robot meet the same scripted user on stand-ins; both tables side by side")
-    p.add_argument("--q-dedicated", metavar="FILE", help="--field: the dedicated robot's Q-table (default: trained, "
+    p.add_argument("--q-dedicated", metavar="FILE", type=user_path, help="--field: the dedicated robot's Q-table (default: trained, "
                    "homeo-sim run --iterations 5000 --seed 0)")
-    p.add_argument("--q-selfish", metavar="FILE", help="--field: the selfish robot's Q-table (default: trained at DoD 0)")
+    p.add_argument("--q-selfish", metavar="FILE", type=user_path, help="--field: the selfish robot's Q-table (default: trained at DoD 0)")
     add_run_options(p, "pepper", seed_help="seed of the decision node and the stand-in")
     p.set_defaults(world_flags=tuple(s.name for s in flags))
 
@@ -167,7 +167,6 @@ def _check_args(a) -> None:
         check_new_bag(a.record)
     if (a.q_dedicated or a.q_selfish) and not a.field:
         raise UserError("--q-dedicated / --q-selfish go with --field")
-    check_files(a, read=[("--q-table", a.q_table), ("--q-dedicated", a.q_dedicated), ("--q-selfish", a.q_selfish)])
     if a.script:
         _script_path(a.script)
     if a.config and not os.path.isfile(a.config):
@@ -186,9 +185,11 @@ def _check_args(a) -> None:
     from homeo_decision.scenario import load_scenario
     from pepper_bridge.config import load_config
 
-    # a bad scenario or config is a one-line error here, not in four nodes
+    # a bad scenario, config or Q-table is a one-line error here, not in four nodes
     sc = load_scenario(a.scenario)
     load_config(a.config, scenario=sc)
+    check_files(a, tables=[("--q-table", a.q_table), ("--q-dedicated", a.q_dedicated), ("--q-selfish", a.q_selfish)],
+                sc=sc)
     if a.resume and (a.field or a.q_table):
         raise UserError("--resume continues one robot from its checkpoint: leave out --field and --q-table")
     a.durable = durable_options(a, "pepper", sc, a.intention == "bayes")

@@ -27,7 +27,7 @@ def evaluate(run: RecordedRun, q_table: str, learning: dict | None = None) -> di
     """``learning``: values of ``POLICY_LEARNING`` by name (the rest: the recorded scenario's)."""
     from homeo_decision import codec
     from homeo_decision.agent import DecisionCore
-    from homeo_decision.qtable_io import load
+    from homeo_decision.checkpoint import load_table as load
     from homeo_decision.reward import reward
 
     sc = run.sc

@@ -15,10 +15,12 @@ import json
 import os
 from pathlib import Path
 
+from homeo_decision import jsonfile
 from homeo_msgs_py.cli_args import UserError
+from homeo_msgs_py.schemas import one_line
 from homeo_msgs_py.graph import NODES, WORLD
 
-from .tap import STRING, Tapped, pub_qos_of
+from .tap import DIAG_KEY, DIAGNOSTIC_ARRAY, STRING, Tapped, pub_qos_of
 
 RUN_INFO_KEY = "homeo.run"  # metadata.yaml custom_data: the run's settings as JSON
 BAG_VERSION = 9  # rosbag2 metadata version of ROS 2 Jazzy
@@ -199,3 +201,51 @@ def write_manifest(spool_dir: Path, path: Path, info: dict, topics: list[Tapped]
         "schema": MANIFEST_SCHEMA, "version": MANIFEST_VERSION, "bag": str(Path(path).absolute()),
         "launcher": [os.getpid(), proc_start(os.getpid())], "info": info,
         "topics": [[t.key, t.name, t.msgtype, t.kind] for t in topics]}, UserError, "the recording's manifest")
+
+
+KINDS = ("state", "event", "diagnostics")
+MAX_MANIFEST = 16 << 20  # bytes: the run's settings and its scenario's text, with room to spare
+
+
+class NotRecovered(Exception):
+    """A spool folder whose manifest cannot be used (``str()``: why, on one line)."""
+
+
+def read_manifest(folder: Path) -> tuple[Path, list, dict, list[Tapped]]:
+    """The bag path, the launcher (pid, start), the run's settings and the topics a spool folder's
+    manifest names; anything else is a one-line ``NotRecovered``."""
+    where = folder / MANIFEST
+    if not where.exists():
+        raise NotRecovered(f"{folder}: no {MANIFEST} (an older version's recording, or one killed before it began); "
+                           "its spools are in the format of homeo_msgs_py/spool.py")
+    try:
+        if where.stat().st_size > MAX_MANIFEST:
+            raise NotRecovered(f"{where}: larger than a manifest ({MAX_MANIFEST} bytes)")
+        raw = jsonfile.read(where, NotRecovered, "recording manifest")
+    except RecursionError:
+        raise NotRecovered(f"{where}: nested too deeply for a manifest") from None
+    except OSError as exc:
+        raise NotRecovered(f"{where}: {exc.strerror or exc}") from None
+    if not isinstance(raw, dict) or raw.get("schema") != MANIFEST_SCHEMA or raw.get("version") != MANIFEST_VERSION:
+        raise NotRecovered(f"{where}: not a {MANIFEST_SCHEMA} manifest of version {MANIFEST_VERSION}")
+    bag, launcher, info, topics = (raw.get(k) for k in ("bag", "launcher", "info", "topics"))
+    if not (isinstance(bag, str) and bag.startswith("/") and "\0" not in bag and Path(bag).name):
+        raise NotRecovered(f"{where}: 'bag' is not an absolute folder path")
+    if not (isinstance(launcher, list) and len(launcher) == 2 and type(launcher[0]) is int
+            and (launcher[1] is None or type(launcher[1]) is int)):
+        raise NotRecovered(f"{where}: 'launcher' is not [pid, start]")
+    if not isinstance(info, dict):
+        raise NotRecovered(f"{where}: 'info' is not an object")
+    if not isinstance(topics, list) or not topics:
+        raise NotRecovered(f"{where}: 'topics' is not a list of topics")
+    out, names = [], set()
+    for t in topics:
+        if not (isinstance(t, list) and len(t) == 4 and all(isinstance(x, str) for x in t)):
+            raise NotRecovered(f"{where}: a topic is not [key, name, type, kind]")
+        key, name, msgtype, kind = t
+        want = DIAGNOSTIC_ARRAY if key == DIAG_KEY else STRING
+        if not name.startswith("/") or name in names or msgtype != want or kind not in KINDS:
+            raise NotRecovered(f"{where}: topic {one_line(name)!s:.80} is not one a bag of the graph holds")
+        names.add(name)
+        out.append(Tapped(key, name, msgtype, kind))
+    return Path(bag), launcher, info, out

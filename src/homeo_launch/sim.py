@@ -16,7 +16,7 @@ from __future__ import annotations
 import json
 import sys
 
-from homeo_msgs_py.cli_args import float_in, int_at_least, setting
+from homeo_msgs_py.cli_args import float_in, int_at_least, setting, user_path
 from homeo_msgs_py.graph import BAYES, INTENTION_MODES, TICKS_MAX
 from homeo_msgs_py.learning import DOD, PSEUDO_UPDATE, XI, add_learning_flags, add_no_pseudo_flag, learning_values
 from homeo_msgs_py.params import add_flag
@@ -40,9 +40,9 @@ def add_parser(sub, name: str, world_cls) -> None:
                         "simulation; what homeo-sim run does by default)")
     s.add_argument("--set", metavar="KEY=VALUE", type=setting, action="append", default=[],
                    help="override an open choice of the scenario")
-    s.add_argument("--load-q", metavar="FILE", help="start from a saved Q-table")
-    s.add_argument("--save-q", metavar="FILE", help="save the Q-table at the end")
-    s.add_argument("--trace", metavar="FILE", help="the world writes one JSON line per tick")
+    s.add_argument("--load-q", metavar="FILE", type=user_path, help="start from a saved Q-table")
+    s.add_argument("--save-q", metavar="FILE", type=user_path, help="save the Q-table at the end")
+    s.add_argument("--trace", metavar="FILE", type=user_path, help="the world writes one JSON line per tick")
     for spec in world_cls.PARAMS:  # the world's own parameters (default: the node's)
         add_flag(s, spec)
     add_run_options(s, name)
@@ -52,16 +52,16 @@ def add_parser(sub, name: str, world_cls) -> None:
 def options_from_args(a) -> GraphOptions:
     from homeo_decision.scenario import load_scenario
 
-    check_files(a, read=[("--load-q", a.load_q)], write=[("--save-q", a.save_q), ("--trace", a.trace)])
+    sc = load_scenario(a.scenario, overrides=dict(a.set))  # a bad scenario is a one-line error here, not in four nodes
+    check_files(a, write=[("--save-q", a.save_q), ("--trace", a.trace)], tables=[("--load-q", a.load_q)], sc=sc)
     if getattr(a, "record", None):
         from .record import check_new_bag
 
         check_new_bag(a.record)
-    sc = load_scenario(a.scenario, overrides=dict(a.set))  # a bad scenario is a one-line error here, not in four nodes
     import os
 
     world = {"iterations": a.iterations, "rate": float(a.rate), "action_timeout": float(a.action_timeout),
-             "trace_path": os.path.abspath(a.trace) if a.trace else ""}
+             "trace_path": os.path.abspath(os.path.expanduser(a.trace)) if a.trace else ""}
     world.update({n: getattr(a, n) for n in a.world_params if getattr(a, n) is not None})
     from homeo_decision.world_api import world_class
 

@@ -47,6 +47,14 @@ def float_in(lo: float, hi: float):
     return conv
 
 
+def user_path(s: str) -> str:
+    """A file or folder the user named: ``~`` is their home, as the shell would have it (``--x=~/f``
+    reaches a program unexpanded)."""
+    import os
+
+    return os.path.expanduser(s)
+
+
 def setting(s: str) -> tuple[str, object]:
     if "=" not in s:
         raise argparse.ArgumentTypeError(f"{s!r} is not KEY=VALUE")

@@ -49,6 +49,7 @@ class NodeDesc:
     services: tuple = ()  # relative to the node (~/...)
     joins: bool = True  # its inputs join into ticks (the world node paces the ticks itself)
     external: tuple = ()  # keys of TOPICS it may read from outside the graph (a person), when its world asks
+    executable: str = ""  # its console script: ``ros2 run homeo_robot EXECUTABLE``, ``ros2 launch`` (pyproject.toml)
 
     def reads(self, learning: bool) -> tuple:
         return tuple(i for i in self.inputs if learning or not i.learning_only)
@@ -69,6 +70,9 @@ TOPICS: dict[str, Topic] = {
     # what a robot asks of the devices around it (a player to play, a light to switch): for whoever
     # drives them; no node of the graph reads it
     "device": Topic("homeo/device", "homeo/device", EVENT),
+    # the action the robot is performing, latched: a person in the loop reads it whenever they look
+    # (``homeo/action`` is an event of the lockstep: gone for a reader that comes late)
+    "last_action": Topic("homeo/last_action", "homeo/last_action", STATE),
     # a person playing the human (``--human person``): read by the simulation in that mode only
     "human_input": Topic("homeo/human_input", "homeo/human_input", EVENT),
 }
@@ -80,15 +84,17 @@ DIAGNOSTICS = "/diagnostics"  # absolute: every node reports to the one aggregat
 WORLD = "homeo_world"  # the one world node: any environment (simulation, Pepper, ...) behind the boundary
 NODES: dict[str, NodeDesc] = {
     WORLD: NodeDesc(WORLD, "homeo_decision.world_node", "world",
-                    ("world", "observation", "outcome", "run_status", "device"), (Input("action"),), ("~/reset",),
-                    joins=False, external=("human_input",)),
+                    ("world", "observation", "outcome", "run_status", "device", "last_action"), (Input("action"),),
+                    ("~/reset",),
+                    joins=False, external=("human_input",), executable="homeo-world-node"),
     "homeo_intention": NodeDesc("homeo_intention", "homeo_intention.node", "intention", ("intention",),
                                 (Input("observation"), Input("outcome", -1, learning_only=True)),
-                                ("~/save_model", "~/load_model")),
+                                ("~/save_model", "~/load_model"), executable="homeo-intention-node"),
     "homeo_drives": NodeDesc("homeo_drives", "homeo_decision.drives_node", "drives", ("drives",),
-                             (Input("world"), Input("intention"), Input("outcome", -1))),
+                             (Input("world"), Input("intention"), Input("outcome", -1)),
+                             executable="homeo-drives-node"),
     "homeo_decision": NodeDesc("homeo_decision", "homeo_decision.node", "decision", ("action",),
-                               (Input("drives"),), ("~/save_q", "~/load_q", "~/reset")),
+                               (Input("drives"),), ("~/save_q", "~/load_q", "~/reset"), executable="homeo-decision-node"),
 }
 LAUNCHER = "homeo_launch"  # the launcher's own node (its monitor)
 RECORDER = "homeo_record"  # the launcher's tap (a bag, a live view)

@@ -146,6 +146,8 @@ class LockstepDriver:
         self.on_done: Callable[[], None] | None = None  # called once the run is done
         # called with tick k before k is stepped, its record of k-1 taken: the world's checkpoint point
         self.on_step: Callable[[int], None] | None = None
+        # called with tick k and the action message performed in it (None: none came), as the step starts
+        self.on_act: Callable[[int, dict | None], None] | None = None
         self._reset_run()
 
     def _reset_run(self) -> None:
@@ -311,6 +313,8 @@ class LockstepDriver:
             self.side.record(self._last_fields)  # the drives after tick k-1 came with this tick's action
         if self.on_step is not None:
             self.on_step(self.tick)
+        if self.on_act is not None:
+            self.on_act(self.tick, action_fields)
         self.phase = "step"
         self._submit("step", self.side.step, action_fields)
 

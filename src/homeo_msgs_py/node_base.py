@@ -145,9 +145,10 @@ class HomeoNode(Node):
             self.get_logger().error(f"recording stopped: writing {topic} to the spool failed: {exc.strerror}")
 
     # -- files named by parameters ---------------------------------------------------------
-    def data_path(self, path: str, what: str) -> str:
-        """``path`` (a parameter's value) inside the data directory, or ``OutsideDataDir``."""
-        return data_dir.resolve(self._data_dir, path, what)
+    def data_path(self, path: str, what: str, trusted: bool = False) -> str:
+        """``path`` (a parameter's value) inside the data directory, or ``OutsideDataDir``; a value
+        the node started with (``trusted``) may lie anywhere (``homeo_msgs_py.data_dir``)."""
+        return data_dir.resolve(self._data_dir, path, what, trusted)
 
     def declare_fixed(self, name: str, default, descriptor):
         """A parameter that takes effect at start only. Not ``read_only``: ``ros2 param load`` of a
@@ -332,7 +333,7 @@ def open_spool(base: str, folder, who: str):
     from .spool import SpoolWriter
 
     try:
-        path = data_dir.resolve(base, folder, "record_spool")
+        path = data_dir.resolve(base, folder, "record_spool", trusted=True)  # set at start
     except data_dir.OutsideDataDir as exc:
         raise NodeConfigError(str(exc)) from None
     try:
@@ -365,8 +366,9 @@ def config_error_line(exc: Exception) -> str:
 
 
 def run_node(factory: Callable[[], Node], args=None, config_errors: tuple = ()) -> int:
-    """Build the node, spin until Ctrl-C / SIGTERM / shutdown, always destroy it and shut down.
-    ``config_errors``: more exception types that mean a bad start-up configuration (exit 2)."""
+    """Build the node, spin until Ctrl-C / SIGTERM / shutdown, always destroy it and shut down; exit
+    code 0 however it was stopped (2: a bad start-up configuration). ``config_errors``: more
+    exception types that mean a bad start-up configuration."""
     from rclpy.exceptions import ParameterException
 
     _die_with_parent()
@@ -382,6 +384,10 @@ def run_node(factory: Callable[[], Node], args=None, config_errors: tuple = ()) 
         print(config_error_line(exc), file=sys.stderr)
         code = 2
     finally:
+        # the stop is under way: a second signal (ros2 launch sends SIGINT and the terminal's Ctrl-C
+        # reaches the node too; then SIGTERM) must not cut the final checkpoint short with a traceback
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(sig, signal.SIG_IGN)
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()

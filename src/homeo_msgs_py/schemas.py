@@ -369,6 +369,12 @@ SCHEMAS: dict[str, dict[str, tuple[Check, bool]]] = {
         "feedback": (_praise_scold, False),
         "proposal": (_one_of("actions", nullable=True), False),
     },
+    # world -> a person in the loop: the action being performed, and what the robot chose it for
+    "homeo/last_action": {
+        "action": (_one_of("actions", nullable=True), True),  # null: nothing (no action came)
+        "intention": (_one_of("intentions"), False),  # the recognised intention it was chosen for
+        "m_dom": (_one_of("internal_states"), False),
+    },
     # world -> the devices around the robot: a command its config maps an action to (play, switch on)
     "homeo/device": {
         "device": (_str, True),

@@ -15,7 +15,7 @@ import json
 from dataclasses import dataclass, field, replace
 from typing import Callable, Iterable, TextIO
 
-from homeo_decision import qtable_io
+from homeo_decision import checkpoint, qtable_io
 from homeo_decision.robot import Robot, run_loop
 from homeo_decision.scenario import Scenario, load_scenario
 from homeo_msgs_py.graph import BAYES, ORACLE
@@ -86,7 +86,7 @@ class Simulation:
         self.policy = make_decision(sc, cfg)
         self.load_report = None
         if cfg.load_q:
-            self.load_report = qtable_io.load(self.policy.q, cfg.load_q)
+            self.load_report = checkpoint.load_table(self.policy.q, cfg.load_q)
         self.recognition = make_recognition_of(sc, cfg)
         self.robot = Robot(sc, self.policy, self.recognition)
         self.env = SimEnvironment(sc, cfg.seed, cues=cfg.intention == BAYES)

@@ -14,67 +14,17 @@ import shutil
 import sys
 from pathlib import Path
 
-from homeo_decision import jsonfile
 from homeo_msgs_py import data_dir
 from homeo_msgs_py.cli_args import UserError
 from homeo_msgs_py.schemas import one_line
 
-from ..record import MANIFEST, MANIFEST_SCHEMA, MANIFEST_VERSION, SPOOL_PREFIX, merge_spools, proc_start
-from ..tap import DIAG_KEY, DIAGNOSTIC_ARRAY, STRING, Tapped
-
-KINDS = ("state", "event", "diagnostics")
-MAX_MANIFEST = 16 << 20  # bytes: the run's settings and its scenario's text, with room to spare
-
-
-class NotRecovered(Exception):
-    """A spool folder that is not turned into a bag (``str()``: why, on one line)."""
-
+from ..record import SPOOL_PREFIX, NotRecovered, merge_spools, proc_start, read_manifest
 
 def add_parser(sub) -> None:
     r = sub.add_parser("recover", help="write the bags of recordings whose launcher was killed outright "
                                        "(the spool folders DATA_DIR/.homeo-record-*)")
     r.add_argument("--data-dir", metavar="DIR", default=data_dir.DEFAULT,
                    help=f"the --data-dir of the recorded runs (default {data_dir.DEFAULT})")
-
-
-def read_manifest(folder: Path) -> tuple[Path, list, dict, list[Tapped]]:
-    """The bag path, the launcher (pid, start), the run's settings and the topics a spool folder's
-    manifest names; anything else is a one-line ``NotRecovered``."""
-    where = folder / MANIFEST
-    if not where.exists():
-        raise NotRecovered(f"{folder}: no {MANIFEST} (an older version's recording, or one killed before it began); "
-                           "its spools are in the format of homeo_msgs_py/spool.py")
-    try:
-        if where.stat().st_size > MAX_MANIFEST:
-            raise NotRecovered(f"{where}: larger than a manifest ({MAX_MANIFEST} bytes)")
-        raw = jsonfile.read(where, NotRecovered, "recording manifest")
-    except RecursionError:
-        raise NotRecovered(f"{where}: nested too deeply for a manifest") from None
-    except OSError as exc:
-        raise NotRecovered(f"{where}: {exc.strerror or exc}") from None
-    if not isinstance(raw, dict) or raw.get("schema") != MANIFEST_SCHEMA or raw.get("version") != MANIFEST_VERSION:
-        raise NotRecovered(f"{where}: not a {MANIFEST_SCHEMA} manifest of version {MANIFEST_VERSION}")
-    bag, launcher, info, topics = (raw.get(k) for k in ("bag", "launcher", "info", "topics"))
-    if not (isinstance(bag, str) and bag.startswith("/") and "\0" not in bag and Path(bag).name):
-        raise NotRecovered(f"{where}: 'bag' is not an absolute folder path")
-    if not (isinstance(launcher, list) and len(launcher) == 2 and type(launcher[0]) is int
-            and (launcher[1] is None or type(launcher[1]) is int)):
-        raise NotRecovered(f"{where}: 'launcher' is not [pid, start]")
-    if not isinstance(info, dict):
-        raise NotRecovered(f"{where}: 'info' is not an object")
-    if not isinstance(topics, list) or not topics:
-        raise NotRecovered(f"{where}: 'topics' is not a list of topics")
-    out, names = [], set()
-    for t in topics:
-        if not (isinstance(t, list) and len(t) == 4 and all(isinstance(x, str) for x in t)):
-            raise NotRecovered(f"{where}: a topic is not [key, name, type, kind]")
-        key, name, msgtype, kind = t
-        want = DIAGNOSTIC_ARRAY if key == DIAG_KEY else STRING
-        if not name.startswith("/") or name in names or msgtype != want or kind not in KINDS:
-            raise NotRecovered(f"{where}: topic {one_line(name)!s:.80} is not one a bag of the graph holds")
-        names.add(name)
-        out.append(Tapped(key, name, msgtype, kind))
-    return Path(bag), launcher, info, out
 
 
 def recover_folder(folder: Path) -> str:
