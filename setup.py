@@ -13,6 +13,7 @@ from setuptools import setup
 PACKAGE = "homeo_robot"
 
 setup(
+    python_requires=">=3.11,<3.13",  # here, not in pyproject.toml (see its note): Jazzy's Python 3.12, and 3.11
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),

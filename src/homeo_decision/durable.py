@@ -10,6 +10,8 @@ Parameters (read-only):
   respawned         this process replaces one that died in the same run: go on with the run's tick
                     offset and parameters, and start fresh if no checkpoint of this launch exists
   session           the launch's id, written into each checkpoint
+  respawn_rejoins   a start that finds this launch's own checkpoint (its session) in checkpoint_dir is
+                    a respawn: it rejoins as ``respawned`` does (ROS launch's respawn passes no flag)
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import os
 from rcl_interfaces.msg import IntegerRange, ParameterDescriptor
 
 from homeo_msgs_py.data_dir import OutsideDataDir
+from homeo_msgs_py.graph import NODES
 from homeo_msgs_py.node_base import NodeConfigError
 from homeo_msgs_py.rejoin import make_rejoinable
 
@@ -39,13 +42,32 @@ def declare(node) -> dict:
         "resume_dir": node.declare_fixed("resume_dir", "", d("start from the checkpoint in this folder ('' = from scratch)")),
         "respawned": node.declare_fixed("respawned", False, d("replaces a node of this run that died")),
         "session": node.declare_fixed("session", "", d("the launch's id, written into each checkpoint")),
+        "respawn_rejoins": node.declare_fixed("respawn_rejoins", False, d(
+            "a start that finds this launch's own checkpoint in checkpoint_dir rejoins the run (ros2 launch respawn)")),
     }
     for key in ("checkpoint_dir", "resume_dir"):
         try:
             cfg[key] = node.data_path(cfg[key], key, trusted=True)  # set at start only
         except OutsideDataDir as exc:
             raise NodeConfigError(str(exc)) from None
+    if cfg["respawn_rejoins"] and not cfg["respawned"] and launch_started(cfg):
+        cfg.update(respawned=True, resume_dir=cfg["checkpoint_dir"])
+        node.get_logger().info("checkpoints of this launch are here: a respawn, rejoining the run")
     return cfg
+
+
+def launch_started(cfg: dict) -> bool:
+    """Whether ``checkpoint_dir`` holds a checkpoint written in this launch (its session), by any node
+    of the graph (the drives node writes one every tick): the run has begun, so this start is a respawn."""
+    if not cfg["checkpoint_dir"] or not cfg["session"]:
+        return False
+    for name in NODES:
+        try:
+            if checkpoint.load(checkpoint.path_for(cfg["checkpoint_dir"], name), name).get("session") == cfg["session"]:
+                return True
+        except checkpoint.CheckpointError:  # none, or not readable
+            pass
+    return False
 
 
 def setup_stage(node, stage, cfg: dict) -> None:

@@ -1,6 +1,7 @@
 """``homeo-launch``: the node graph with any world of the registry, from one command.
 
     homeo-launch sim | pepper | day | <any registered world> [options]   the graph (``launch.py``)
+    homeo-launch watch [options]       follow a graph ros2 launch started (``watch.py``, ``ros_launch.py``)
     homeo-launch bench | soak | recover [options]                        operations (``ops/``)
 
 Each world of the ``homeo_robot.worlds`` registry is a command: the Pepper has its own front end
@@ -23,7 +24,7 @@ from .monitor import GraphError
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from . import pepper, sim
+    from . import pepper, sim, watch
     from .ops import bench, recover, soak
 
     ap = Parser(prog=PROG, description="Start the homeostatic robot's ROS 2 node graph.")
@@ -34,6 +35,7 @@ def build_parser() -> argparse.ArgumentParser:
             pepper.add_parser(sub)
         else:
             sim.add_parser(sub, name, worlds[name].load())
+    watch.add_parser(sub)
     bench.add_parser(sub)
     soak.add_parser(sub)
     recover.add_parser(sub)
@@ -58,6 +60,10 @@ def main(argv=None) -> int:
             from .pepper import cmd_pepper
 
             return cmd_pepper(args)
+        if args.cmd == "watch":
+            from .watch import cmd_watch
+
+            return cmd_watch(args)
         if args.cmd in ("bench", "soak", "recover"):
             from importlib import import_module
 

@@ -165,8 +165,9 @@ def run_graph(o: GraphOptions, *, quiet: bool = False, log_dir: str | None = Non
             mon.spin(0.1)  # the newest status on its way
             if mon.status is not None:
                 last.update(mon.status.fields, tick=mon.status.tick)
-        if t_start is not None:  # what ran until now: the ticks of the last status, the time to now
-            last.update(elapsed_s=time.monotonic() - t_start, rss_mb=graph.rss_mb())
+        if t_start is not None:  # what ran until now: the ticks and the run's time of the last status
+            last.update(elapsed_s=(last.get("extra") or {}).get("elapsed_s", time.monotonic() - t_start),
+                        rss_mb=graph.rss_mb())
         raise
     finally:
         if tap is not None:

@@ -75,60 +75,77 @@ def options_from_args(a) -> GraphOptions:
 
 def cmd_sim(a) -> int:
     from homeo_decision.scenario import load_scenario
-    from homeo_sim.cli import format_table, run_output
-    from homeo_sim.stats import json_safe
 
     o = options_from_args(a)
     sc = load_scenario(o.scenario or None, overrides=dict(o.overrides))
-    bar = None
-    if not a.quiet:
-        from tqdm import tqdm
-
-        bar = tqdm(total=o.iterations or None, unit="tick", file=sys.stderr, leave=False, dynamic_ncols=True,
-                   desc="graph")
-
-    def progress(tick, fields):
-        if bar is not None:
-            if tick < bar.n:  # a new run (~/reset): its own count and clock
-                bar.reset(total=fields.get("iterations") or None)
-            bar.n = tick
-            bar.set_postfix_str(fields["state"] + (f", {fields['missed']} missed" if fields["missed"] else ""),
-                                refresh=False)
-            bar.refresh()
-
+    bar = progress_bar(a.quiet, o.iterations)
     last: dict = {}
     status = None
     sinks = []
     try:
         sinks = open_sinks(a, a.world, o.iterations, o.seed, sc, o.overrides, intention=o.intention)
-        status = run_graph(o, quiet=a.quiet, log_dir=a.log_dir, on_status=progress, last=last, sinks=sinks)
+        status = run_graph(o, quiet=a.quiet, log_dir=a.log_dir, on_status=bar, last=last, sinks=sinks)
     except KeyboardInterrupt:
         pass
     finally:
-        if bar is not None:
-            bar.close()
+        bar.close()
         close_sinks(sinks)
+    return print_result(status if status is not None else last, status is None, sc, o.seed, o.iterations, a.json)
+
+
+class progress_bar:
+    """The run's progress on stderr (tqdm), fed by the run status: ``bar(tick, fields)``; none when quiet."""
+
+    def __init__(self, quiet: bool, total: int):
+        from tqdm import tqdm
+
+        self.bar = None if quiet else tqdm(total=total or None, unit="tick", file=sys.stderr, leave=False,
+                                           dynamic_ncols=True, desc="graph")
+
+    def __call__(self, tick: int, fields: dict) -> None:
+        bar = self.bar
+        if bar is None:
+            return
+        if tick < bar.n:  # a new run (~/reset): its own count and clock
+            bar.reset(total=fields.get("iterations") or None)
+        bar.n = tick
+        bar.set_postfix_str(fields["state"] + (f", {fields['missed']} missed" if fields["missed"] else ""),
+                            refresh=False)
+        bar.refresh()
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def print_result(status: dict, interrupted: bool, sc, seed: int, iterations: int, as_json: bool) -> int:
+    """What a run of a world with metrics prints: Table 4.5's metrics (``homeo-sim run``'s JSON with
+    ``as_json``), and the graph's time, misses, memory and restarts. An interrupted run shows what it
+    measured so far, its real tick count and time; the exit code: 0, or 130 for a bounded run cut short."""
+    from homeo_sim.cli import format_table, run_output
+    from homeo_sim.stats import json_safe
+
     code = 0
-    if status is None:  # Ctrl-C: the nodes are stopped; show what the run measured so far
+    if interrupted:  # Ctrl-C: the nodes are stopped; show what the run measured so far
         print(f"{PROG}: interrupted; all nodes stopped", file=sys.stderr)
-        if not last.get("metrics"):
+        if not status.get("metrics"):
             return 130
         print(f"{PROG}: metrics of the run so far:", file=sys.stderr)
-        status = last
-        code = 0 if o.iterations == 0 else 130
-    ticks = status.get("tick", o.iterations) if status is last else (status.get("extra") or {}).get("ticks", o.iterations)
-    out = run_output(ticks, [o.seed], [status["metrics"]], sc.drive_names)
+        code = 0 if iterations == 0 else 130
+    ticks = status.get("tick", iterations) if interrupted else (status.get("extra") or {}).get("ticks", iterations)
+    out = run_output(ticks, [seed], [status["metrics"]], sc.drive_names)
     restarts = status.get("restarts")
     if restarts:  # only when there were any: an undisturbed run prints what homeo-sim run prints
         out["restarts"] = restarts
         out["missed"] = status.get("missed", 0)  # the ticks the restarts cost
-    if a.json:
+    if as_json:
         print(json.dumps(json_safe(out)))
-    else:
-        print(format_table(out, sc.drive_names, sc.name))
-        elapsed = status.get("elapsed_s", float("nan"))
-        print(f"graph: {elapsed:.1f} s for {ticks} ticks ({elapsed / max(1, ticks) * 1e3:.2f} ms/tick), "
-              f"{status.get('missed', 0)} missed, {status.get('rss_mb', float('nan')):.0f} MiB resident")
-        if restarts:
-            print("restarts: " + ", ".join(f"{n} {k}" for n, k in sorted(restarts.items())))
+        return code
+    print(format_table(out, sc.drive_names, sc.name))
+    elapsed = status.get("elapsed_s", float("nan"))
+    rss = f", {status['rss_mb']:.0f} MiB resident" if "rss_mb" in status else ""
+    print(f"graph: {elapsed:.1f} s for {ticks} ticks ({elapsed / max(1, ticks) * 1e3:.2f} ms/tick), "
+          f"{status.get('missed', 0)} missed{rss}")
+    if restarts:
+        print("restarts: " + ", ".join(f"{n} {k}" for n, k in sorted(restarts.items())))
     return code

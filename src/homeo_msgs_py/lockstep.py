@@ -368,9 +368,9 @@ class LockstepDriver:
         fields = {"iterations": self.iterations, "done": self.state == DONE, "missed": self.missed,
                   "state": self.state}
         fields.update(self.side.status(self.state == DONE))
-        if self.state == DONE:
-            fields.setdefault("extra", {})
-            fields["extra"] = dict(fields["extra"] or {}, elapsed_s=self.elapsed, ticks=self.tick)
+        if self.state in (RUNNING, FINISHING, DONE):  # the run's own time: an interrupted run is timed by it too
+            elapsed = self.elapsed if self.state == DONE else self.clock() - self._t_begin
+            fields["extra"] = dict(fields.get("extra") or {}, elapsed_s=elapsed, ticks=self.tick)
         return fields
 
 
