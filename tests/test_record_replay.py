@@ -67,7 +67,7 @@ def test_the_bag_holds_every_topic_one_message_per_tick_as_cdr_std_msgs_string(r
     meta = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
     assert meta["version"] == 9 and meta["storage_identifier"] == "mcap"
     types = {t["topic_metadata"]["name"]: t["topic_metadata"]["type"] for t in meta["topics_with_message_count"]}
-    assert types == {**{f"/homeo/{k}": "std_msgs/msg/String" for k in HOMEO + ("device", "human_input")},
+    assert types == {**{f"/homeo/{k}": "std_msgs/msg/String" for k in HOMEO + ("device", "last_action", "human_input")},
                      "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray"}
     latched = {t["topic_metadata"]["name"]: t["topic_metadata"]["offered_qos_profiles"][0]["durability"]
                for t in meta["topics_with_message_count"]}

@@ -40,6 +40,8 @@ def defaults(world: str = "sim") -> dict:
     os.environ.pop("HOMEO_AUTH_FILE", None)  # no graph secret: the defaults of an unsigned node
     rclpy.init(args=["--ros-args", "-p", f"world:={world}", "-p", f"data_dir:={DATA_DIR}"])
     out = {}
+    stdout = os.dup(1)
+    os.dup2(2, 1)  # what the nodes' libraries print (libqi's notes) goes to stderr, not into the file
     try:
         for name, cls in node_classes(world):
             node = cls()
@@ -51,6 +53,9 @@ def defaults(world: str = "sim") -> dict:
                 node.destroy_node()
     finally:
         rclpy.try_shutdown()
+        sys.stdout.flush()
+        os.dup2(stdout, 1)
+        os.close(stdout)
     return out
 
 

@@ -27,13 +27,16 @@ BAG_VERSION = 9  # rosbag2 metadata version of ROS 2 Jazzy
 
 
 def check_new_bag(path: str) -> Path:
-    """The bag folder to create; a one-line error for an existing path or a missing parent."""
+    """The bag folder to create (its parent made if missing); a one-line error for an existing path
+    or a parent that cannot be made or written."""
     p = Path(path)
     if p.exists():
         raise UserError(f"--record {path}: already exists (a bag is never overwritten)")
     parent = p.absolute().parent
-    if not parent.is_dir():
-        raise UserError(f"--record {path}: the directory {parent} does not exist")
+    try:
+        parent.mkdir(parents=True, exist_ok=True)  # --record runs/me makes runs/, as a user expects
+    except OSError as exc:
+        raise UserError(f"--record {path}: {parent}: {exc.strerror}") from None
     if not os.access(parent, os.W_OK):
         raise UserError(f"--record {path}: {parent} is not writable")
     return p

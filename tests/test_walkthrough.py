@@ -1,0 +1,95 @@
+"""The README's "play the human" walkthrough, step by step, with the real ``ros2`` command line.
+
+Terminal 1 is ``homeo-launch sim --human person ...`` as the README gives it (two ticks instead of
+twenty); terminal 2 is the person, with the ``ros2`` commands the README shows beside each
+``homeo-topic`` one: a wish, a look at what the robot is doing (``homeo/last_action`` is latched:
+an echo started whenever the person looks gets it), an answer, the next wish, praise, and at the end
+``homeo-replay`` of the recording.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+import yaml
+
+import ros2cli
+from rosgraph import fresh_domain
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+
+
+def _ros2(args: list[str], env: dict, timeout: float = 60.0) -> subprocess.CompletedProcess:
+    return subprocess.run([str(ros2cli.BIN / "ros2"), *args], env=env, capture_output=True, text=True, timeout=timeout)
+
+
+def _say(text: str, env: dict) -> None:
+    """``ros2 topic pub --once /homeo/human_input std_msgs/msg/String "{data: '...'}"``."""
+    r = _ros2(["topic", "pub", "--once", "/homeo/human_input", "std_msgs/msg/String", yaml.safe_dump({"data": text})],
+              env)
+    assert r.returncode == 0, r.stderr
+
+
+def _look(topic: str, env: dict, must: bool = True) -> dict | None:
+    """``ros2 topic echo --once --full-length TOPIC``: the message's JSON (None: not published yet)."""
+    r = _ros2(["topic", "echo", "--once", "--full-length", topic], env)
+    if r.returncode != 0 and not must:
+        return None
+    assert r.returncode == 0, r.stderr
+    return json.loads(yaml.safe_load(r.stdout.split("---")[0])["data"])
+
+
+def _wait_for_the_person(env: dict, proc, bound: float = 90.0) -> None:
+    """Until the run waits for the person's first wish (its status: starting)."""
+    end = time.monotonic() + bound
+    while time.monotonic() < end:
+        assert proc.poll() is None, proc.communicate()[1][-3000:]
+        status = _look("/homeo/run_status", env, must=False)
+        if status is not None and status["state"] == "starting":
+            return
+        time.sleep(0.5)
+    raise AssertionError("the graph never waited for the person")
+
+
+def test_the_play_the_human_walkthrough_with_the_ros2_command_line(tmp_path):
+    ros2cli.require_tools()
+    from homeo_launch.processes import graph_env
+
+    env = ros2cli.env_with_venv(graph_env(fresh_domain()))
+    # terminal 1 (README): the robot, with you as the human
+    robot = subprocess.Popen([sys.executable, "-m", "homeo_launch.cli", "sim", "--human", "person", "--intention",
+                              "oracle", "--iterations", "2", "--human-timeout", "30", "--record", "runs/me", "--quiet"],
+                             cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             start_new_session=True)
+    try:
+        _wait_for_the_person(env, robot)
+        # terminal 2: you. A wish starts the tick; after the robot acts, answer it.
+        _say('{"intention": "music"}', env)
+        time.sleep(1.0)  # a person reads a second later: the action is latched for them
+        first = _look("/homeo/last_action", env)
+        assert first["tick"] == 0 and first["intention"] == "music" and "action" in first, first
+        wrong = first["action"] != "Play"
+        _say('{"feedback": "scold", "proposal": "Play"}' if wrong else '{"feedback": "praise"}', env)
+        _say('{"intention": "music"}', env)  # next tick, same wish
+        time.sleep(1.0)
+        second = _look("/homeo/last_action", env)
+        assert second["tick"] == 1 and second["intention"] == "music", second
+        _say('{"feedback": "praise"}', env)
+        out, err = robot.communicate(timeout=120)
+    finally:
+        if robot.poll() is None:
+            os.killpg(robot.pid, signal.SIGINT)
+            robot.communicate(timeout=30)
+    assert robot.returncode == 0 and "2 iterations x 1 seed" in out, err[-3000:]
+    # afterwards: what happened, from the recording
+    r = subprocess.run([sys.executable, "-m", "homeo_launch.replay", "runs/me", "--log"], cwd=tmp_path, env=env,
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert "2 ticks, 2 with a wish" in r.stdout and "1 praised" in r.stdout, r.stdout
+    assert ("1 scolded" in r.stdout) == wrong, r.stdout
