@@ -3,13 +3,20 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN     = $(VENV)/bin
 STAMP   = $(VENV)/.installed
+# an interpreter pyenv holds but has not activated (PYTHON=python3.12 on these machines): its own path
+PY     := $(shell $(PYTHON) -c 'import sys; print(sys.executable)' 2>/dev/null || \
+            (v=$$(pyenv versions --bare 2>/dev/null | grep -E "^$(subst python,,$(PYTHON))(\.|$$)" | tail -n 1); \
+             [ -n "$$v" ] && echo "$$(pyenv prefix $$v)/bin/python"))
+# the real ros2 command line and launch system (wheels of their Jazzy sources), for the workspace tests
+ROS2_TOOLS ?= $(firstword $(wildcard ../shared/ros2-tools /work/shared/ros2-tools))
 
-.PHONY: setup run test bench report calibrate-setup clean
+.PHONY: setup run test test-core test-py312 ros2-tools bench report calibrate-setup clean
 
 setup: $(STAMP)
 
 $(STAMP): pyproject.toml requirements.lock
-	$(PYTHON) -m venv $(VENV)
+	@[ -n "$(PY)" ] || { echo "make: no interpreter $(PYTHON) (give PYTHON=python3.11 or python3.12)"; exit 2; }
+	$(PY) -m venv $(VENV)
 	$(BIN)/pip install --disable-pip-version-check -q -r requirements.lock
 	$(BIN)/pip install --disable-pip-version-check -q --no-deps --no-build-isolation -e .
 	touch $(STAMP)
@@ -18,8 +25,26 @@ run: setup
 	$(BIN)/homeo-launch sim --iterations 5000 --seed 0 --save-q out/q-seed0.json
 	$(BIN)/homeo-sim run --iterations 5000 --seeds 20
 
-test: setup
+test: setup ros2-tools
 	$(BIN)/python -m pytest -q
+
+# the core, the graph's equivalence with the in-process runner, and the launch tests (ros2 launch in a
+# colcon workspace): what .ci/run runs on the second Python
+CORE_TESTS = tests/test_golden.py tests/test_graph_stages.py tests/test_determinism.py tests/test_scenario.py \
+             tests/test_objectq.py tests/test_reward.py tests/test_motivation.py tests/test_world_conformance.py \
+             tests/test_ros2_workspace.py
+test-core: setup ros2-tools
+	$(BIN)/python -m pytest -q $(CORE_TESTS)
+
+test-py312:
+	$(MAKE) test-core PYTHON=python3.12 VENV=.venv312
+
+ros2-tools: $(VENV)/.ros2-tools
+
+$(VENV)/.ros2-tools: $(STAMP) tools/requirements-ros2.lock
+	@if [ -z "$(ROS2_TOOLS)" ]; then echo "make: no ros2-tools (../shared/ros2-tools): the ROS 2 workspace tests will skip"; \
+	else $(ROS2_TOOLS)/install.sh $(VENV) && \
+	  $(BIN)/pip install --disable-pip-version-check -q --no-deps -r tools/requirements-ros2.lock && touch $@; fi
 
 bench: setup
 	$(BIN)/homeo-sim bench
@@ -33,4 +58,4 @@ calibrate-setup: setup
 	$(BIN)/pip install --disable-pip-version-check -q --no-deps -r tools/requirements-calibrate.lock
 
 clean:
-	rm -rf $(VENV) build src/*.egg-info
+	rm -rf $(VENV) .venv312 build install log src/*.egg-info
