@@ -6,6 +6,8 @@ import copy
 import json
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from homeo_decision import qtable_io
 from homeo_decision.objectq import ObjectQ
@@ -187,3 +189,97 @@ def test_failed_load_leaves_table_untouched(tmp_path, toy, saved):
     with pytest.raises(QTableError):
         qtable_io.load(q, write(tmp_path, text))
     assert q.q == fresh
+
+
+# -- a decision checkpoint is a Q-table too (issue 23: --load-q of out/checkpoints/sim/homeo_decision.json) --
+def _trained_core(sc, ticks: int = 200):
+    from homeo_sim.runner import RunConfig, Simulation
+
+    sim = Simulation(sc, RunConfig(iterations=ticks, seed=4))
+    sim.run(ticks)
+    return sim.policy
+
+
+def test_a_decision_checkpoint_loads_as_its_q_table(tmp_path, toy):
+    from homeo_decision import checkpoint
+
+    core = _trained_core(toy)
+    path = tmp_path / "homeo_decision.json"
+    checkpoint.save(path, checkpoint.decision_checkpoint(core, 200, 0, "s1"))
+    q = ObjectQ(toy)
+    rep = checkpoint.load_table(q, path)
+    assert q.q == core.q.q and rep.loaded and not rep.dropped
+    table = tmp_path / "q.json"
+    qtable_io.save(core.q, table)
+    q2 = ObjectQ(toy)
+    checkpoint.load_table(q2, table)  # a Q-table file as ever
+    assert q2.q == core.q.q
+
+
+def test_another_nodes_checkpoint_or_a_broken_one_is_refused_in_one_line(tmp_path, toy):
+    from homeo_decision import checkpoint
+
+    path = tmp_path / "homeo_intention.json"
+    checkpoint.save(path, checkpoint.envelope("homeo_intention", 5, 0, 0, {}, None, {"model": 1}))
+    with pytest.raises(QTableError, match="not of homeo_decision: it holds no Q-table") as exc:
+        checkpoint.load_table(ObjectQ(toy), path)
+    assert "\n" not in str(exc.value)
+    bad = json.loads(path.read_text())
+    bad.update(node="homeo_decision", state={"schema": "nope"})
+    path.write_text(json.dumps(bad))
+    with pytest.raises(QTableError, match="not a Q-table file"):
+        checkpoint.load_table(ObjectQ(toy), path)
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(doc=st.recursive(st.none() | st.booleans() | st.integers() | st.floats(allow_nan=False) | st.text(max_size=8),
+                        lambda inner: st.lists(inner, max_size=3) | st.dictionaries(
+                            st.sampled_from(["schema", "version", "node", "ticks", "tick_offset", "run", "params",
+                                             "state", "x"]), inner, max_size=6), max_leaves=15),
+       envelope=st.booleans())
+def test_any_file_loads_as_a_table_or_is_a_one_line_refusal(tmp_path, toy, doc, envelope):
+    """Whatever a --load-q file holds (a checkpoint envelope around it, or not): a table, or QTableError."""
+    from homeo_decision import checkpoint
+
+    if envelope and isinstance(doc, dict):
+        doc = dict(doc, schema=checkpoint.SCHEMA)
+    path = tmp_path / "any.json"
+    path.write_text(json.dumps(doc))
+    try:
+        checkpoint.load_table(ObjectQ(toy), path)
+    except QTableError as exc:
+        assert str(exc) and "\n" not in str(exc)
+
+
+def test_the_commands_take_a_decision_checkpoint_for_load_q(tmp_path, thesis):
+    """``homeo-sim run --load-q`` and ``homeo-replay --policy`` accept the decision node's checkpoint (what
+    a user reaches for after a long graph run), as a Q-table file."""
+    import subprocess
+    import sys
+
+    from homeo_decision import checkpoint
+
+    path = tmp_path / "homeo_decision.json"
+    checkpoint.save(path, checkpoint.decision_checkpoint(_trained_core(thesis), 200, 0, "s1"))
+    r = subprocess.run([sys.executable, "-m", "homeo_sim.cli", "run", "--iterations", "100", "--json", "--quiet",
+                        "--load-q", str(path)], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0 and json.loads(r.stdout)["iterations"] == 100, r.stderr
+
+
+@pytest.mark.ros
+def test_the_graph_starts_from_a_decision_checkpoint(tmp_path, thesis):
+    import subprocess
+    import sys
+
+    from rosgraph import fresh_domain
+
+    from homeo_decision import checkpoint
+    from homeo_launch.processes import graph_env
+
+    path = tmp_path / "elsewhere" / "homeo_decision.json"  # outside the data directory: the user's own path
+    path.parent.mkdir()
+    checkpoint.save(path, checkpoint.decision_checkpoint(_trained_core(thesis), 200, 0, "s1"))
+    r = subprocess.run([sys.executable, "-m", "homeo_launch.cli", "sim", "--iterations", "60", "--json", "--quiet",
+                        "--load-q", str(path), "--data-dir", str(tmp_path / "out"), "--intention", "oracle"],
+                       capture_output=True, text=True, timeout=240, env=graph_env(fresh_domain()))
+    assert r.returncode == 0 and json.loads(r.stdout)["iterations"] == 60, r.stderr[-2000:]

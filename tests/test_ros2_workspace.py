@@ -184,3 +184,32 @@ def test_package_xml_names_every_runtime_dependency_by_its_rosdep_key():
         else:
             assert rosdep[name] in deps, f"{name}: {rosdep[name]} is not a dependency in package.xml"
     assert (ros2cli.REPO / "resource" / ros2cli.PACKAGE).exists()
+
+
+def test_a_node_killed_under_ros2_launch_is_respawned_and_rejoins_the_run(ws, env, tmp_path):
+    """As homeo-launch's supervisor does: the launch respawns it, it finds this launch's checkpoints
+    (respawn_rejoins) and goes on with its learned state; the run completes, every process exits 0."""
+    import subprocess
+
+    launch = ros2cli.popen(ws, f"ros2 launch {ros2cli.PACKAGE} sim.launch.py iterations:=500 rate:=40 "
+                               f"data_dir:={tmp_path / 'out'}", env)
+    try:
+        _wait_running(ws, env, launch)
+        ck = tmp_path / "out" / "checkpoints" / "sim" / "homeo_decision.json"
+        end = time.monotonic() + 60
+        while not ck.exists() and time.monotonic() < end:  # its first checkpoint (tick 100)
+            time.sleep(0.2)
+        victim = subprocess.run(["pgrep", "-f", f"lib/{ros2cli.PACKAGE}/homeo-decision-node"], capture_output=True,
+                                text=True).stdout.split()
+        assert ck.exists() and len(victim) == 1, victim
+        os.kill(int(victim[0]), signal.SIGKILL)
+        out = launch.communicate(timeout=180)[0]
+    finally:
+        if launch.poll() is None:
+            os.killpg(launch.pid, signal.SIGINT)
+            launch.communicate(timeout=60)
+    assert launch.returncode == 0, out[-3000:]
+    died = _finished_cleanly(out)
+    assert len(died) == 1 and died[0][0] == "-9" and "homeo-decision-node" in died[0][1], died
+    assert "a respawn, rejoining the run" in out and "500 iterations x 1 seed" in out, out[-3000:]
+    assert out.count("process has finished cleanly") == 5, out[-3000:]

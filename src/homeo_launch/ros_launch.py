@@ -107,8 +107,17 @@ def node_params(world: str, v: dict, session: str, spool: str) -> dict:
         world_params["config"] = os.path.abspath(os.path.expanduser(v["config"]))
     if world == "pepper" and v["standin"] and v["script"]:
         world_params["end_with_script"] = True  # the run ends with the scripted user
+    overrides = ()
+    if world == "pepper" and v["standin"] and v["script"]:  # the scripted user's robot.drives: the initial drives
+        from pepper_bridge.user import load_script
+
+        from .pepper import _script_path
+
+        drives = (load_script(_script_path(v["script"])).get("robot") or {}).get("drives")
+        overrides = (("initial_drives", dict(drives)),) if drives else ()
     o = GraphOptions(world=world, world_params=world_params, intention=ORACLE if v["intention"] == "cues" else
                      v["intention"], scenario=os.path.abspath(v["scenario"]) if v["scenario"] else "",
+                     overrides=overrides,
                      load_q=v["load_q"] or None, save_q=v["save_q"] or None, data_dir=data_dir,
                      checkpoint_dir=os.path.join(data_dir, "checkpoints", world) if v["checkpoints"] else "",
                      session=session, max_restarts=v["max_restarts"])
@@ -159,7 +168,11 @@ def _graph(context, world: str, names: list):
             port = s.getsockname()[1]
         v["qi_url"] = f"tcp://127.0.0.1:{port}"
         cmd = [ExecutableInPackage("homeo-pepper-standin", PACKAGE), "--listen", v["qi_url"], "--time-scale", "0"]
-        cmd += ["--seed", str(v["seed"] or 0)] + (["--script", v["script"]] if v["script"] else [])
+        if v["script"]:
+            from .pepper import _script_path
+
+            cmd += ["--script", str(_script_path(v["script"]))]
+        cmd += ["--seed", str(v["seed"] or 0)]
         actions.append(ExecuteProcess(cmd=cmd, name="pepper_standin", output="log"))
     params = node_params(world, v, session, spool)
     files = [v["params_file"]] if v["params_file"] else []
