@@ -420,3 +420,44 @@ def test_a_drives_checkpoint_of_other_world_codes_is_refused_in_one_line_and_cha
         checkpoint.restore_drives(fresh, ck, "f")
     assert "\n" not in str(e.value) and str(e.value).startswith("f: ")
     assert checkpoint.drives_learned(fresh.perception) == before
+
+
+# -- issues 22-23: a day script, the launch files' arguments -----------------------------------------
+DAY_KEYS = st.sampled_from(["schema", "version", "repeat", "moments", "description", "ticks", "wish", "present", "x"])
+DAY = st.recursive(SCALARS | st.sampled_from(["homeo-day", "music", "none", 1, 30]), lambda inner: st.lists(
+    inner, max_size=4) | st.dictionaries(DAY_KEYS, inner, max_size=5), max_leaves=25)
+
+
+@FAST
+@given(raw=DAY | st.builds(lambda m: {"schema": "homeo-day", "version": 1, "moments": m}, DAY))
+def test_any_day_script_is_a_day_or_a_one_line_refusal(thesis, raw):
+    from homeo_sim.day import DayScriptError, check_day
+
+    try:
+        day = check_day(raw, thesis, "day.json")
+    except DayScriptError as exc:
+        assert str(exc).startswith("day.json") and "\n" not in str(exc)
+        return
+    assert day["moments"] and all(1 <= t <= 10**6 and 0 <= w < len(thesis.intention_names) and type(p) is bool
+                                  for t, w, p in day["moments"])
+
+
+@FAST
+@given(args=st.fixed_dictionaries({k: st.text(max_size=12) | st.sampled_from(["", "0", "1.5", "-1", "true", "nan",
+                                                                                "1e9", "bayes", "person"])
+                                   for k in ("seed", "iterations", "rate", "dod", "xi", "human", "human_timeout",
+                                             "max_restarts", "checkpoints", "json", "intention")}))
+def test_any_launch_argument_is_taken_or_refused_in_one_line(args):
+    """``ros2 launch homeo_robot sim.launch.py NAME:=TEXT``: each argument by the declaration of what it sets."""
+    from homeo_launch.ros_launch import LaunchArgError, values
+
+    given = dict(args, namespace="", data_dir="out", record="", params_file="", scenario="", load_q="", save_q="",
+                 trace="")
+    try:
+        v = values(given, "sim")
+    except LaunchArgError as exc:
+        assert str(exc).startswith("launch argument") and "\n" not in str(exc)
+        return
+    assert v["intention"] in ("oracle", "bayes")
+    assert v["seed"] == "" or (type(v["seed"]) is int and 0 <= v["seed"] <= 2**31 - 1)
+    assert v["dod"] == "" or 0.0 <= v["dod"] <= 1.0
