@@ -83,5 +83,11 @@ def popen(ws: Path, command: str, env: dict) -> subprocess.Popen:
                             text=True, start_new_session=True)
 
 
+def stop_daemon(env: dict) -> None:
+    """``ros2 daemon stop`` for ``env``'s domain: the ros2 commands start one per domain, and a test's
+    domain is its own, so each test stops the one it started (no daemons left behind)."""
+    subprocess.run([str(BIN / "ros2"), "daemon", "stop"], env=env, capture_output=True, timeout=60)
+
+
 def cleanup(ws: Path) -> None:
     shutil.rmtree(ws, ignore_errors=True)

@@ -117,7 +117,7 @@ def test_the_module_import_graph_has_no_cycle():
     def visit(m: str) -> list[str] | None:
         state[m] = 1
         stack.append(m)
-        for d in sorted(g.get(m, ())):
+        for d in sorted(g.get(m, ()) - {m}):  # a module importing itself (``python -m``'s idiom) is no cycle
             if state.get(d) == 1:
                 return stack[stack.index(d):] + [d]
             if d not in state:

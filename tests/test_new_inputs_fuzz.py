@@ -346,7 +346,7 @@ def test_the_trials_files_in_the_repo_are_read_whole():
                                                      "\0"]))
 def test_the_record_spool_parameter_opens_a_spool_or_is_refused(tmp_path, folder):
     """The spool folder is set when the node starts (by its launcher): any existing folder will do,
-    a relative one under the data directory; anything else is one line."""
+    a relative one under the data directory, ``~`` the user's home; anything else is one line."""
     from homeo_msgs_py.node_base import open_spool
 
     base = tmp_path / "out"
@@ -363,7 +363,8 @@ def test_the_record_spool_parameter_opens_a_spool_or_is_refused(tmp_path, folder
         assert w is None
         return
     try:
-        assert w.path.parent == Path(os.path.realpath(os.path.join(base, folder))) and w.path.parent.is_dir()
+        want = os.path.realpath(os.path.join(base, os.path.expanduser(folder)))
+        assert w.path.parent == Path(want) and w.path.parent.is_dir()
     finally:
         w.close()
         w.path.unlink()

@@ -43,7 +43,8 @@ def env(tmp_path):
 
     e = ros2cli.env_with_venv(graph_env(fresh_domain()))
     e["ROS_LOG_DIR"] = str(tmp_path / "roslog")
-    return e
+    yield e
+    ros2cli.stop_daemon(e)
 
 
 def _finished_cleanly(out: str) -> list[str]:
@@ -86,7 +87,7 @@ def _wait_running(ws, env, proc, bound: float = 90.0) -> None:
     end = time.monotonic() + bound
     while time.monotonic() < end:
         assert proc.poll() is None, proc.stdout.read()[-3000:]
-        r = ros2cli.run(ws, "ros2 topic echo --once --full-length /homeo/run_status", env, timeout=30)
+        r = ros2cli.run(ws, "ros2 topic echo --once --full-length --qos-durability transient_local --qos-reliability reliable /homeo/run_status", env, timeout=30)
         if r.returncode == 0 and "running" in r.stdout:
             return
     raise AssertionError("the graph did not start running")

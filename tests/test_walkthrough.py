@@ -37,8 +37,13 @@ def _say(text: str, env: dict) -> None:
 
 
 def _look(topic: str, env: dict, must: bool = True) -> dict | None:
-    """``ros2 topic echo --once --full-length TOPIC``: the message's JSON (None: not published yet)."""
-    r = _ros2(["topic", "echo", "--once", "--full-length", topic], env)
+    """``ros2 topic echo --once --full-length --qos-durability transient_local --qos-reliability reliable
+    TOPIC`` (a latched topic): the message's JSON (None: not published yet). Without the QoS options
+    echo takes the publishers' QoS only if it has discovered them when it starts, and else subscribes
+    volatile and never gets the latched message (ros2topic's ``choose_qos``): slow discovery on a busy
+    machine made that a 60 s wait."""
+    r = _ros2(["topic", "echo", "--once", "--full-length", "--qos-durability", "transient_local",
+               "--qos-reliability", "reliable", topic], env)
     if r.returncode != 0 and not must:
         return None
     assert r.returncode == 0, r.stderr
@@ -86,6 +91,7 @@ def test_the_play_the_human_walkthrough_with_the_ros2_command_line(tmp_path):
         if robot.poll() is None:
             os.killpg(robot.pid, signal.SIGINT)
             robot.communicate(timeout=30)
+        ros2cli.stop_daemon(env)
     assert robot.returncode == 0 and "2 iterations x 1 seed" in out, err[-3000:]
     # afterwards: what happened, from the recording
     r = subprocess.run([sys.executable, "-m", "homeo_launch.replay", "runs/me", "--log"], cwd=tmp_path, env=env,

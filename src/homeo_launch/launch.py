@@ -19,7 +19,7 @@ from dataclasses import dataclass, field, replace
 from homeo_msgs_py.data_dir import DEFAULT as DATA_DIR
 from homeo_msgs_py.graph import BAYES, GRAPH, NODES, ROBOT_NODES, WORLD, endpoints
 
-from .monitor import DISCOVERY_TIMEOUT_S, GraphError, Monitor, check_alive
+from .monitor import DISCOVERY_TIMEOUT_S, GraphError, Monitor, RunFollower, check_alive
 from .processes import Graph, NodeSpec, dds_defaults, graph_env
 from .supervise import Supervisor
 from .supervise import wait_until_up as supervised_wait
@@ -107,8 +107,9 @@ def run_graph(o: GraphOptions, *, quiet: bool = False, log_dir: str | None = Non
         o = replace(o, session=new_session())
     graph = Graph(with_spool(graph_specs(o), writers, o.data_dir), graph_env(), log_dir, namespace=o.namespace,
                   auth=o.auth)
-    mon = tap = sup = t_start = None
-    last = {} if last is None else last
+    mon = tap = sup = None
+    run = RunFollower(last)
+    last = run.last
     try:
         mon = Monitor(graph.namespace, graph.signer)
         sup = Supervisor(graph, mon.node, o.max_restarts, os.path.abspath(o.checkpoint_dir) if o.checkpoint_dir else "",
@@ -124,27 +125,21 @@ def run_graph(o: GraphOptions, *, quiet: bool = False, log_dir: str | None = Non
         supervised_wait(graph, mon, checks, GRAPH, endpoints(o.intention == BAYES), discovery_timeout)
         if on_start is not None:
             on_start(graph)
-        seen = None
         while True:
             mon.spin(0.05)
             checks()  # a node that died is restarted (bounded); the world node goes on with the run
-            st = mon.status
             if sup.restarts:
                 last["restarts"] = dict(sup.restarts)
-            if st is None or st is seen:
+            if not run.take(mon.status):
                 continue
-            seen = st
-            if t_start is None and st.fields["state"] in ("running", "finishing", "done"):
-                t_start = time.monotonic()
-            last.update(st.fields, tick=st.tick)
             if on_status is not None:
-                on_status(st.tick, st.fields)
-            if st.fields["done"]:
+                on_status(mon.status.tick, mon.status.fields)
+            if last["done"]:
                 break
         if tap_sinks:
             drain(mon, tap)
         out = dict(last)
-        out["elapsed_s"] = (out.get("extra") or {}).get("elapsed_s", time.monotonic() - t_start)
+        out["elapsed_s"] = run.elapsed_s()
         out["rss_mb"] = graph.rss_mb()
         if o.save_q:
             ok, msg = save_q(mon, o)
@@ -165,9 +160,8 @@ def run_graph(o: GraphOptions, *, quiet: bool = False, log_dir: str | None = Non
             mon.spin(0.1)  # the newest status on its way
             if mon.status is not None:
                 last.update(mon.status.fields, tick=mon.status.tick)
-        if t_start is not None:  # what ran until now: the ticks and the run's time of the last status
-            last.update(elapsed_s=(last.get("extra") or {}).get("elapsed_s", time.monotonic() - t_start),
-                        rss_mb=graph.rss_mb())
+        if run.t_start is not None:  # what ran until now: the ticks and the run's time of the last status
+            last.update(elapsed_s=run.elapsed_s(), rss_mb=graph.rss_mb())
         raise
     finally:
         if tap is not None:

@@ -95,6 +95,33 @@ class Monitor:
         self.rclpy.try_shutdown()
 
 
+class RunFollower:
+    """The run as its statuses told it: ``last`` (the newest fields, with the tick) and when the
+    first tick ran, for the launcher and for ``homeo-launch watch``."""
+
+    def __init__(self, last: dict | None = None):
+        self.last = {} if last is None else last
+        self.t_start: float | None = None
+        self._seen = None
+
+    def take(self, status) -> bool:
+        """Take the monitor's status if it is new (True)."""
+        if status is None or status is self._seen:
+            return False
+        self._seen = status
+        if self.t_start is None and status.fields["state"] in ("running", "finishing", "done"):
+            self.t_start = time.monotonic()
+        self.last.update(status.fields, tick=status.tick)
+        return True
+
+    def elapsed_s(self) -> float:
+        """The run's own time (its status's ``extra.elapsed_s``), else the time since its first tick."""
+        own = (self.last.get("extra") or {}).get("elapsed_s")
+        if own is not None:
+            return own
+        return time.monotonic() - self.t_start if self.t_start is not None else 0.0
+
+
 def wait_until_up(graph: Graph, mon: Monitor, nodes, endpoints, bound: float, check=None) -> None:
     """Until every node and endpoint of the graph is discovered; ``check`` (default: no node has
     died) runs on every turn and raises to stop the wait."""

@@ -21,6 +21,7 @@ from __future__ import annotations
 import os
 
 from homeo_msgs_py.graph import BAYES, GRAPH, NODES, ORACLE, WORLD
+from homeo_msgs_py.learning import DOD, XI
 
 PACKAGE = "homeo_robot"
 RESPAWN_DELAY_S = 0.5
@@ -29,8 +30,7 @@ COMMON = (
     ("seed", "", "seed of every component (default: the node's, 0)"),
     ("iterations", "", "ticks of the run, 0 = until Ctrl-C (default: the node's, 5000; pepper: 0)"),
     ("rate", "", "ticks per second, 0 = as fast as the lockstep allows"),
-    ("dod", "", "Degree of Dedication, Eq 3.27 (default: the scenario's)"),
-    ("xi", "", "motivation factor, Eq 3.20 (default: the scenario's)"),
+    *((s.name, "", f"{s.doc}, Eq {s.eq} (default: the scenario's)") for s in (DOD, XI)),
     ("namespace", "", "put the whole graph under /NAMESPACE"),
     ("data_dir", "out", "the nodes' data directory: relative files, and paths set while running, live here"),
     ("record", "", "record every topic as a rosbag2 bag (MCAP) in this new folder"),
@@ -55,7 +55,7 @@ WORLD_ARGS = {
 }
 # launch argument -> (node, parameter) for the arguments that are node parameters as they stand
 AS_PARAMS = {"seed": [(WORLD, "seed"), ("homeo_decision", "seed")], "iterations": [(WORLD, "iterations")],
-             "rate": [(WORLD, "rate")], "dod": [("homeo_decision", "dod")], "xi": [("homeo_decision", "xi")],
+             "rate": [(WORLD, "rate")], DOD.name: [("homeo_decision", DOD.name)], XI.name: [("homeo_decision", XI.name)],
              "human": [(WORLD, "human")], "human_timeout": [(WORLD, "human_timeout")]}
 
 

@@ -53,6 +53,7 @@ def options_from_args(a) -> GraphOptions:
     from homeo_decision.scenario import load_scenario
 
     sc = load_scenario(a.scenario, overrides=dict(a.set))  # a bad scenario is a one-line error here, not in four nodes
+    durable = durable_options(a, a.world, sc, a.intention == BAYES)  # contradicting options first, then the files
     check_files(a, write=[("--save-q", a.save_q), ("--trace", a.trace)], tables=[("--load-q", a.load_q)], sc=sc)
     if getattr(a, "record", None):
         from .record import check_new_bag
@@ -70,7 +71,7 @@ def options_from_args(a) -> GraphOptions:
                         intention=a.intention,
                         scenario=a.scenario or "", overrides=tuple(a.set), load_q=a.load_q, save_q=a.save_q,
                         data_dir=a.data_dir, namespace=a.namespace, auth=not a.no_auth,
-                        **durable_options(a, a.world, sc, a.intention == BAYES))
+                        **durable)
 
 
 def cmd_sim(a) -> int:

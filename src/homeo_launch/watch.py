@@ -13,7 +13,6 @@ import json
 import shutil
 import signal
 import sys
-import time
 from pathlib import Path
 
 from homeo_msgs_py.cli_args import int_at_least, setting, user_path
@@ -43,25 +42,19 @@ def cmd_watch(a) -> int:
     from homeo_decision.scenario import load_scenario
     from homeo_msgs_py.auth import load_signer
 
-    from .monitor import Monitor
+    from .monitor import Monitor, RunFollower
     from .sim import progress_bar
 
     sc = load_scenario(a.scenario, overrides=dict(a.set))
     mon = Monitor(a.namespace, load_signer())
     bar = progress_bar(a.quiet, a.iterations)
-    last: dict = {}
-    t_start, seen, interrupted = None, None, False
+    run, interrupted = RunFollower(), False
+    last = run.last
     try:
         while not last.get("done"):
             mon.spin(0.05)
-            st = mon.status
-            if st is None or st is seen:
-                continue
-            seen = st
-            if t_start is None and st.fields["state"] in ("running", "finishing", "done"):
-                t_start = time.monotonic()
-            last.update(st.fields, tick=st.tick)
-            bar(st.tick, st.fields)
+            if run.take(mon.status):
+                bar(mon.status.tick, mon.status.fields)
         if a.save_q:
             ok, msg = mon.call_trigger("homeo_decision/save_q", timeout=10.0)
             if not ok:
@@ -75,7 +68,7 @@ def cmd_watch(a) -> int:
         mon.close()
         if a.record_spool:
             merge_recording(Path(a.record_spool))
-    last["elapsed_s"] = (last.get("extra") or {}).get("elapsed_s", time.monotonic() - t_start if t_start else 0.0)
+    last["elapsed_s"] = run.elapsed_s()
     if a.world == "pepper":
         return print_log(last, a.json)
     from .sim import print_result
