@@ -25,8 +25,12 @@ run: setup
 	$(BIN)/homeo-launch sim --iterations 5000 --seed 0 --save-q out/q-seed0.json
 	$(BIN)/homeo-sim run --iterations 5000 --seeds 20
 
+# two workers (pytest-xdist): the graph tests mostly wait on discovery and timeouts; each worker has
+# its own ROS domains and data directory (tests/rosgraph.py, tests/conftest.py)
+WORKERS ?= 2
+
 test: setup ros2-tools
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n $(WORKERS)
 
 # the core, the graph's equivalence with the in-process runner, and the launch tests (ros2 launch in a
 # colcon workspace): what .ci/run runs on the second Python
@@ -34,7 +38,7 @@ CORE_TESTS = tests/test_golden.py tests/test_graph_stages.py tests/test_determin
              tests/test_objectq.py tests/test_reward.py tests/test_motivation.py tests/test_world_conformance.py \
              tests/test_ros2_workspace.py
 test-core: setup ros2-tools
-	$(BIN)/python -m pytest -q $(CORE_TESTS)
+	$(BIN)/python -m pytest -q -n $(WORKERS) $(CORE_TESTS)
 
 test-py312:
 	$(MAKE) test-core PYTHON=python3.12 VENV=.venv312

@@ -51,6 +51,22 @@ def _toy_dict() -> dict:
     }
 
 
+@pytest.fixture(scope="session", autouse=True)
+def _own_data_dir(tmp_path_factory):
+    """The nodes' default data directory (``HOMEO_DATA_DIR``) in this session's temporary folder, not
+    the repository's ``out/``: tests that leave it to the default (checkpoints, Q-tables) write there,
+    and two pytest-xdist workers never share one."""
+    import os
+
+    old = os.environ.get("HOMEO_DATA_DIR")
+    os.environ["HOMEO_DATA_DIR"] = str(tmp_path_factory.mktemp("data") / "out")
+    yield
+    if old is None:
+        os.environ.pop("HOMEO_DATA_DIR", None)
+    else:
+        os.environ["HOMEO_DATA_DIR"] = old
+
+
 @pytest.fixture
 def toy_raw():
     """A builder of fresh toy-scenario dicts (mutate freely)."""

@@ -14,13 +14,21 @@ from homeo_launch.processes import dds_defaults
 
 os.environ.update(dds_defaults())  # before any rclpy context of the test process
 
-# domain ids 0..232 are valid; spread parallel pytest sessions by pid
-_DOMAINS = itertools.count(100 + (os.getpid() % 40) * 3)
+# domain ids 0..232 are valid; the tests take 100..229. Each pytest-xdist worker (``make test`` runs
+# two) has a share of its own, so two tests running at once never meet on one domain; a plain pytest
+# session spreads its start by pid, for two sessions side by side.
+_WORKER = os.environ.get("PYTEST_XDIST_WORKER", "")
+_WORKERS = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1") or 1)
+_SPAN = 130 // max(_WORKERS, 1)
+_START = 100 + int(_WORKER[2:]) * _SPAN if _WORKER[2:].isdigit() else 100 + (os.getpid() % 40) * 3
+_DOMAINS = itertools.count(0)
 
 
 def fresh_domain() -> int:
     d = next(_DOMAINS)
-    return 100 + (d - 100) % 130
+    if _WORKER:
+        return _START + d % _SPAN
+    return 100 + (_START - 100 + d) % 130
 
 
 class Probe:

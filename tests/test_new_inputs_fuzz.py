@@ -462,3 +462,33 @@ def test_any_launch_argument_is_taken_or_refused_in_one_line(args):
     assert v["intention"] in ("oracle", "bayes")
     assert v["seed"] == "" or (type(v["seed"]) is int and 0 <= v["seed"] <= 2**31 - 1)
     assert v["dod"] == "" or 0.0 <= v["dod"] <= 1.0
+
+
+# -- homeo-topic's number options: a value in range, or one line ---------------------------------------
+@FAST
+@given(cmd=st.sampled_from([("list", "--wait"), ("echo", "--count"), ("echo", "--timeout"), ("pub", "--times"),
+                            ("pub", "--rate"), ("pub", "--wait"), ("param", "--wait"), ("call", "--wait")]),
+       value=st.text(max_size=12) | st.sampled_from(["nan", "inf", "-inf", "-1", "0", "1e400", "3", "0.5", "3601"]))
+@example(cmd=("pub", "--wait"), value="nan")
+def test_homeo_topic_number_options_are_in_range_or_one_line(cmd, value):
+    """What homeo-topic waits, counts and repeats (hand ranges: a wait in [0, 3600] s, a count >= 0,
+    times in [1, 10^6], a rate in [0.001, 10^4]/s) or UserError in one line: never NaN or infinity,
+    which would reach rclpy's Duration."""
+    import math
+
+    from homeo_launch.topic_cli import build_parser
+    from homeo_msgs_py.cli_args import UserError
+
+    sub, opt = cmd
+    positional = {"list": [], "echo": ["/homeo/drives"], "pub": ["/homeo/drives", "{}"],
+                  "param": ["/homeo_decision", "dod"], "call": ["/homeo_decision/save_q"]}[sub]
+    try:
+        a = build_parser().parse_args([sub, *positional, f"{opt}={value}"])
+    except UserError as exc:
+        assert str(exc) and "\n" not in str(exc)
+        return
+    v = getattr(a, opt[2:])
+    assert math.isfinite(v)
+    lo, hi = {"--wait": (0, 3600), "--count": (0, math.inf), "--timeout": (0, 1e9), "--times": (1, 10 ** 6),
+              "--rate": (1e-3, 1e4)}[opt]
+    assert lo <= v <= hi

@@ -173,7 +173,8 @@ def test_package_xml_names_every_runtime_dependency_by_its_rosdep_key():
     deps = {e.text for e in root if e.tag.endswith("depend")}
     text = (ros2cli.REPO / "package.xml").read_text()
     rosdep = {"numpy": "python3-numpy", "matplotlib": "python3-matplotlib", "tqdm": "python3-tqdm",
-              "websockets": "python3-websockets", "pytest": "python3-pytest", "hypothesis": "python3-hypothesis",
+              "websockets": "python3-websockets", "pytest": "python3-pytest", "pytest-xdist": "python3-pytest-xdist",
+              "hypothesis": "python3-hypothesis",
               "ros-jazzy-rclpy": "rclpy", "ros-jazzy-common-interfaces": "std_msgs",
               "ros-jazzy-rmw-fastrtps-cpp": "rclpy"}
     no_key = ("pgmpy", "qi", "rosbags", "mcap", "mcap-ros2-support", "foxglove-sdk")

@@ -30,9 +30,12 @@ def _ros2(args: list[str], env: dict, timeout: float = 60.0) -> subprocess.Compl
 
 
 def _say(text: str, env: dict) -> None:
-    """``ros2 topic pub --once /homeo/human_input std_msgs/msg/String "{data: '...'}"``."""
-    r = _ros2(["topic", "pub", "--once", "/homeo/human_input", "std_msgs/msg/String", yaml.safe_dump({"data": text})],
-              env)
+    """``ros2 topic pub --once --keep-alive 3 /homeo/human_input std_msgs/msg/String "{data: '...'}"``.
+    ``--once`` waits until the publisher has matched the robot's reader, but the robot may not yet
+    have matched the publisher (discovery runs both ways); with the default 0.1 s of keep-alive the
+    publisher is gone before the message is delivered again, and the wish was lost on a busy machine."""
+    r = _ros2(["topic", "pub", "--once", "--keep-alive", "3", "/homeo/human_input", "std_msgs/msg/String",
+               yaml.safe_dump({"data": text})], env)
     assert r.returncode == 0, r.stderr
 
 

@@ -10,6 +10,7 @@ import argparse
 import os
 import sys
 
+from homeo_msgs_py import data_dir
 from homeo_msgs_py.cli_args import UserError, float_in, int_at_least, user_path
 from homeo_msgs_py.graph import SEED_MAX
 
@@ -37,8 +38,8 @@ def add_graph_options(p) -> None:
     """``--namespace`` and ``--no-auth``, shared by ``sim`` and ``pepper``."""
     p.add_argument("--namespace", type=_namespace_arg, default="", metavar="NS",
                    help="put the whole graph (nodes, topics, services) under /NS, so several robots share a domain")
-    p.add_argument("--data-dir", metavar="DIR", type=user_path, default="out",
-                   help="the nodes' data directory (default out): relative file parameters resolve in it, and a "
+    p.add_argument("--data-dir", metavar="DIR", type=user_path, default=data_dir.default_dir(),
+                   help="the nodes' data directory (default out, or $HOMEO_DATA_DIR): relative file parameters resolve in it, and a "
                         "path set while the graph runs (ros2 param set, a service) must lie in it")
     p.add_argument("--no-auth", action="store_true",
                    help="do not sign the graph's messages: for debugging with ros2 topic pub; anyone on the "

@@ -23,7 +23,7 @@ import sys
 import time
 
 from homeo_decision.codec import vocabulary
-from homeo_msgs_py.cli_args import Parser, UserError, setting
+from homeo_msgs_py.cli_args import Parser, UserError, float_in, int_at_least, setting
 from homeo_msgs_py.graph import DIAGNOSTICS, TOPICS, key_of
 from homeo_msgs_py.schemas import SCHEMAS, VERSION, Rejected, Vocabulary, decode, validate
 
@@ -190,7 +190,12 @@ def cmd_pub(args) -> int:
             pub.publish(String(data=text))
             if i + 1 < args.times:
                 ros.spin_for(1.0 / args.rate)
-        ros.spin_for(0.3)  # let reliable delivery finish before the publisher goes away
+        # the readers may not have matched this publisher yet when it matched them (discovery runs both
+        # ways): wait until every reader acknowledged, so the message is not lost with the publisher
+        from rclpy.duration import Duration
+
+        if not pub.wait_for_all_acked(Duration(seconds=args.wait)):
+            print(f"{PROG}: note: not every reader acknowledged within {args.wait:g} s", file=sys.stderr)
         print(f"published {args.times} message{'s' if args.times != 1 else ''} on {args.topic}")
     finally:
         ros.close()
@@ -252,6 +257,9 @@ def cmd_call(args) -> int:
         ros.close()
 
 
+WAIT = float_in(0.0, 3600.0)  # seconds of discovery or of a service's answer
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = Parser(prog=PROG, description="Inspect the homeo graph (no ros2 CLI needed).")
     sub = ap.add_subparsers(dest="cmd", required=True, parser_class=Parser)
@@ -262,28 +270,28 @@ def build_parser() -> argparse.ArgumentParser:
                        help="open-choice override")
 
     ls = sub.add_parser("list", help="nodes and topics with their writers and readers")
-    ls.add_argument("--wait", type=float, default=3.0, help="seconds of discovery before listing (default 3)")
+    ls.add_argument("--wait", type=WAIT, default=3.0, help="seconds of discovery before listing (default 3)")
     e = sub.add_parser("echo", help="print a topic's messages as JSON")
     e.add_argument("topic")
-    e.add_argument("--count", type=int, default=0, help="stop after N messages (default: until Ctrl-C)")
-    e.add_argument("--timeout", type=float, default=0.0, help="stop after S seconds (default: never)")
+    e.add_argument("--count", type=int_at_least(0), default=0, help="stop after N messages (default: until Ctrl-C)")
+    e.add_argument("--timeout", type=float_in(0.0, 1e9), default=0.0, help="stop after S seconds (default: never)")
     e.add_argument("--compact", action="store_true", help="one line per message")
     scen(e)
     p = sub.add_parser("pub", help="validate a JSON message and publish it")
     p.add_argument("topic")
     p.add_argument("json")
-    p.add_argument("--times", type=int, default=1)
-    p.add_argument("--rate", type=float, default=10.0, help="messages per second with --times (default 10)")
-    p.add_argument("--wait", type=float, default=3.0, help="seconds to wait for a reader (default 3)")
+    p.add_argument("--times", type=int_at_least(1, 10 ** 6), default=1)
+    p.add_argument("--rate", type=float_in(1e-3, 1e4), default=10.0, help="messages per second with --times (default 10)")
+    p.add_argument("--wait", type=WAIT, default=3.0, help="seconds to wait for a reader (default 3)")
     scen(p)
     pa = sub.add_parser("param", help="get or set a node's parameter")
     pa.add_argument("node")
     pa.add_argument("name")
     pa.add_argument("value", nargs="?")
-    pa.add_argument("--wait", type=float, default=5.0)
+    pa.add_argument("--wait", type=WAIT, default=5.0)
     c = sub.add_parser("call", help="call a std_srvs/Trigger service")
     c.add_argument("service")
-    c.add_argument("--wait", type=float, default=5.0)
+    c.add_argument("--wait", type=WAIT, default=5.0)
     return ap
 
 
@@ -292,15 +300,6 @@ def main(argv=None) -> int:
 
     try:
         args = build_parser().parse_args(argv)
-        if getattr(args, "times", 1) < 1:
-            raise UserError("--times must be at least 1")
-        if getattr(args, "count", 0) < 0:
-            raise UserError("--count must be >= 0")
-        for k in ("wait", "timeout"):
-            if getattr(args, k, 0.0) < 0:
-                raise UserError(f"--{k} must be >= 0")
-        if getattr(args, "rate", 1.0) <= 0:
-            raise UserError("--rate must be positive")
         return {"list": cmd_list, "echo": cmd_echo, "pub": cmd_pub, "param": cmd_param, "call": cmd_call}[args.cmd](args)
     except (UserError, ScenarioError) as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)

@@ -82,6 +82,8 @@ def _num(lo: float, hi: float) -> Check:
     def check(v, voc, where):
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             raise Rejected(f"{where} must be a number, got {type(v).__name__}")
+        if isinstance(v, int) and abs(v) >= 10 ** MAX_INT_DIGITS:  # float() of it could overflow
+            raise Rejected(f"{where}: an integer of more than {MAX_INT_DIGITS} digits")
         if not math.isfinite(v) or not lo <= v <= hi:
             raise Rejected(f"{where} = {v} is outside [{lo:g}, {hi:g}]")
         return float(v)
