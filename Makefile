@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN     = $(VENV)/bin
 STAMP   = $(VENV)/.installed
 
-.PHONY: setup run test bench report calibrate-setup clean
+.PHONY: setup run test bench report calibrate-setup profile-setup clean
 
 setup: $(STAMP)
 
@@ -18,7 +18,7 @@ run: setup
 	$(BIN)/homeo-launch sim --iterations 5000 --seed 0 --save-q out/q-seed0.json
 	$(BIN)/homeo-sim run --iterations 5000 --seeds 20
 
-test: setup
+test: setup profile-setup
 	$(BIN)/python -m pytest -q
 
 bench: setup
@@ -31,6 +31,10 @@ report: setup
 # the joint search's tool dependency (tools/calibrate.py --joint; docs/FIDELITY.md), not the runtime's
 calibrate-setup: setup
 	$(BIN)/pip install --disable-pip-version-check -q --no-deps -r tools/requirements-calibrate.lock
+
+# the profiler of `homeo-launch bench --profile` (a tool dependency: py-spy; its test runs with `make test`)
+profile-setup: setup
+	$(BIN)/pip install --disable-pip-version-check -q --no-deps -r tools/requirements-profile.lock
 
 clean:
 	rm -rf $(VENV) build src/*.egg-info

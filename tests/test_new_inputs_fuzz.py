@@ -410,3 +410,31 @@ def test_a_drives_checkpoint_of_other_world_codes_is_refused_in_one_line_and_cha
         checkpoint.restore_drives(fresh, ck, "f")
     assert "\n" not in str(e.value) and str(e.value).startswith("f: ")
     assert checkpoint.drives_learned(fresh.perception) == before
+
+
+# -- issue 24: the bench's new options ---------------------------------------------------------------------------
+BENCH_FLAGS = ("--compare-checkpoints", "--profile", "--oracle", "--critical-path")
+
+
+@FAST
+@example(flag="--profile", rest=["=1"])
+@example(flag="--compare-checkpoints", rest=["--rounds", "x\n"])
+@given(flag=st.sampled_from(BENCH_FLAGS),
+       rest=st.lists(st.sampled_from(["--json", "--rounds", "--iterations", "2", "on", *BENCH_FLAGS])
+                     | st.text(max_size=12), max_size=3))
+def test_the_bench_flags_parse_or_are_one_line_errors_exit_2(flag, rest, capsys):
+    """A flag takes no value: whatever follows it is another option, or one line and exit 2."""
+    from homeo_launch.cli import build_parser, main
+    from homeo_msgs_py.cli_args import UserError
+
+    argv = ["bench", flag, *rest]
+    try:
+        a = build_parser().parse_args(argv)
+    except UserError as exc:
+        assert "\n" not in str(exc) and "\r" not in str(exc)
+        capsys.readouterr()
+        assert main(argv) == 2  # the command line's error: no traceback, one line
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "Traceback" not in err
+        return
+    assert getattr(a, flag[2:].replace("-", "_")) is True
