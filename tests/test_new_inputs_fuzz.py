@@ -492,3 +492,31 @@ def test_homeo_topic_number_options_are_in_range_or_one_line(cmd, value):
     lo, hi = {"--wait": (0, 3600), "--count": (0, math.inf), "--timeout": (0, 1e9), "--times": (1, 10 ** 6),
               "--rate": (1e-3, 1e4)}[opt]
     assert lo <= v <= hi
+
+
+# -- issue 24: the bench's new options ---------------------------------------------------------------------------
+BENCH_FLAGS = ("--compare-checkpoints", "--profile", "--oracle", "--critical-path")
+
+
+@FAST
+@example(flag="--profile", rest=["=1"])
+@example(flag="--compare-checkpoints", rest=["--rounds", "x\n"])
+@given(flag=st.sampled_from(BENCH_FLAGS),
+       rest=st.lists(st.sampled_from(["--json", "--rounds", "--iterations", "2", "on", *BENCH_FLAGS])
+                     | st.text(max_size=12), max_size=3))
+def test_the_bench_flags_parse_or_are_one_line_errors_exit_2(flag, rest, capsys):
+    """A flag takes no value: whatever follows it is another option, or one line and exit 2."""
+    from homeo_launch.cli import build_parser, main
+    from homeo_msgs_py.cli_args import UserError
+
+    argv = ["bench", flag, *rest]
+    try:
+        a = build_parser().parse_args(argv)
+    except UserError as exc:
+        assert "\n" not in str(exc) and "\r" not in str(exc)
+        capsys.readouterr()
+        assert main(argv) == 2  # the command line's error: no traceback, one line
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "Traceback" not in err
+        return
+    assert getattr(a, flag[2:].replace("-", "_")) is True

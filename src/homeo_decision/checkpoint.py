@@ -16,6 +16,7 @@ launch's checkpoint, never a stale one of an earlier run); ``state``: the decisi
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import json
 import math
@@ -158,9 +159,18 @@ def digest(obj) -> str:
 
 # -- the decision node ------------------------------------------------------------------------------
 def decision_checkpoint(core, ticks: int, run: int, session: str = "") -> dict:
+    return decision_snapshot(core, ticks, run, session)()
+
+
+def decision_snapshot(core, ticks: int, run: int, session: str = "") -> "Snapshot":
+    """The decision's checkpoint as a copy of its table's rows (tens of microseconds), the random
+    stream's state and the parameters; the labelled table (about a millisecond) is built when written."""
+    q = copy.copy(core.q)  # the scenario's layout shared; the values copied
+    q.q = [[row[:] for row in table] for table in core.q.q]
     params = dict(core.params(), **{SEED.name: core.seed})
-    return envelope("homeo_decision", ticks, core.tick_offset, run, params, core.rng.state(),
-                    qtable_io.to_dict(core.q), session)
+    rng, offset = core.rng.state(), core.tick_offset
+    return Snapshot(ticks, lambda: envelope("homeo_decision", ticks, offset, run, params, rng, qtable_io.to_dict(q),
+                                            session))
 
 
 def load_table(q: ObjectQ, path: str | Path) -> qtable_io.LoadReport:
@@ -269,27 +279,48 @@ def load_slots(path: str | Path, node: str) -> dict:
 
 
 class Checkpointer:
-    """When a node writes its checkpoint: every ``every`` ticks and at shutdown. ``make()`` builds the
-    envelope; a failed write is reported through ``log`` and counted, never raised (the robot goes on
-    learning; the previous checkpoint stays)."""
+    """When a node writes its checkpoint: every ``every`` ticks and at shutdown. ``make()`` takes the
+    snapshot: the envelope, or a call that builds it, from data the node will not change afterwards.
+    With ``background`` the snapshot is written by a thread of its own (``checkpoint_writer``), off
+    the tick's path; ``close()`` writes what is on its way (at shutdown, before the final one). A
+    failed write is reported through ``log`` and counted, never raised (the robot goes on learning;
+    the previous checkpoint stays)."""
 
-    def __init__(self, directory: str, node: str, every: int, make, log=lambda text: None):
+    def __init__(self, directory: str, node: str, every: int, make, log=lambda text: None,
+                 background: bool = False):
         self.path = path_for(directory, node) if directory else None
         self._slots = SlotWriter(self.path) if self.path is not None and node in PER_TICK else None
         self.every, self.make, self.log = max(1, int(every)), make, log
         self.saved = self.failed = 0
-        self.last_ticks = -1
+        self.last_ticks = -1  # of the newest checkpoint written
+        self._handed = -1  # of the newest one handed to the background writer
         self.last_error = ""
+        self._thread = None
+        self._superseded = 0
+        if background and self.path is not None:
+            from .checkpoint_writer import BackgroundWriter
+
+            self._thread = BackgroundWriter(self._write, name=f"{node}-checkpoints")
 
     def after_tick(self, ticks: int) -> None:
         """``ticks``: the node's learned tick count after this tick."""
-        if self.path is not None and ticks > 0 and ticks % self.every == 0 and ticks != self.last_ticks:
+        if self.path is not None and ticks > 0 and ticks % self.every == 0 and ticks not in (self.last_ticks,
+                                                                                              self._handed):
             self.save()
 
     def save(self) -> bool:
+        """Take the snapshot and write it (in the background: hand it over); False when not written."""
         if self.path is None:
             return False
-        ck = self.make()
+        snap = self.make()
+        if self._thread is None:
+            return self._write(snap)
+        self._handed = snap["ticks"] if isinstance(snap, dict) else snap.ticks
+        self._thread.submit(snap)
+        return True
+
+    def _write(self, snap) -> bool:
+        ck = snap if isinstance(snap, dict) else snap()
         try:
             self._slots.write(ck) if self._slots is not None else save(self.path, ck)
         except CheckpointError as exc:
@@ -300,6 +331,28 @@ class Checkpointer:
         self.saved += 1
         self.last_ticks = ck["ticks"]
         return True
+
+    @property
+    def superseded(self) -> int:
+        """Snapshots the background writer dropped for a newer one (a disk slower than the interval)."""
+        return self._thread.superseded if self._thread is not None else self._superseded
+
+    def close(self) -> None:
+        """Write what is on its way and end the background writer; later saves write in the caller."""
+        if self._thread is not None:
+            self._thread.close()
+            self._superseded, self._thread = self._thread.superseded, None
+
+
+class Snapshot:
+    """A checkpoint taken as a cheap copy in the tick and built into its envelope when written:
+    ``ticks`` now, ``build()`` (the envelope) later, in the writer's thread."""
+
+    def __init__(self, ticks: int, build):
+        self.ticks, self._build = ticks, build
+
+    def __call__(self) -> dict:
+        return self._build()
 
 
 # -- the drives node ----------------------------------------------------------------------------------

@@ -8,10 +8,14 @@ Tick k joins the world and the recognised intention of tick k with the outcome o
 (``homeo_msgs_py.graph``): the effects of k-1, the body of k, Eq 3.2-3.3 for the perceived world.
 
 The node carries the internal drives from tick to tick: no latched topic holds them once the node
-is gone (its own latched drives die with it), so it writes them every tick, before it answers, in
-two slots of one file (``checkpoint.SlotWriter``: tens of microseconds, no fsync). Restarted by
-the launcher within the run, it goes on from exactly the state it had after the last tick it
-answered; a resumed run starts a new episode from the scenario's initial drives, as ever.
+is gone (its own latched drives die with it), so it checkpoints them every tick in two slots of one
+file (``checkpoint.SlotWriter``: one ``pwrite``, no fsync, tens of microseconds), right after the
+answer is sent: the write is off the lockstep's path (the decision is at work on the answer
+meanwhile). A thread of its own would cost more than the write (handing the GIL over and back, about
+0.1 ms a tick: ``homeo-launch bench --profile``). Restarted by the launcher within the run, it goes on
+from the state it had after the last tick it answered (a SIGKILL between the answer and the write
+loses that one tick: the slot of the tick before is whole); a resumed run starts a new episode from
+the scenario's initial drives, as ever.
 """
 
 from __future__ import annotations
@@ -50,11 +54,10 @@ class DrivesNode(durable.CheckpointedNode, ScenarioNode):
             self.get_logger().info(
                 f"rejoined from {where}: run {ck['run']}, tick {ck['state']['tick']}, learned state "
                 f"{checkpoint.digest(checkpoint.drives_learned(self.host.perception))}")
-        self.checkpoints = checkpoint.Checkpointer(
-            self.durable["checkpoint_dir"], DESC.name, 1,
-            lambda: checkpoint.drives_checkpoint(self.host.perception, max(0, self.host.stage.run), *self._answer,
-                                                 self.durable["session"]),
-            lambda text: self.get_logger().warning(text, throttle_duration_sec=5.0))
+        self.checkpoints = durable.checkpointer(
+            self, lambda: checkpoint.drives_checkpoint(self.host.perception, max(0, self.host.stage.run), *self._answer,
+                                                       self.durable["session"]), every=1, throttle_s=5.0,
+            background=False)
         self.pub = self.robot_publisher("drives")
         for i in DESC.inputs:
             self.subscribe(i.topic, lambda m, key=i.topic: self._put(key, m))
@@ -65,10 +68,12 @@ class DrivesNode(durable.CheckpointedNode, ScenarioNode):
         except ScenarioError as exc:  # validated fields always encode; stay up regardless
             raise Rejected(str(exc)) from None
         for k, fields in done:
-            if (k, fields) != self._answer:  # not a repeat of the last answer
+            new = (k, fields) != self._answer  # not a repeat of the last answer
+            if new:
                 self._answer, self.ticks = (k, fields), k + 1
-                self.checkpoints.save()  # every tick, before the answer goes out: a restart never misses it
             self.send(self.pub, k, fields, self.host.stage.run)
+            if new:
+                self.checkpoints.save()  # every tick, once the answer is on its way
 
 
 def main(args=None) -> int:

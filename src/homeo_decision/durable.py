@@ -95,13 +95,25 @@ def read_start(node, cfg: dict) -> dict | None:
     return ck
 
 
+def checkpointer(node, make, every: int | None = None, directory: str | None = None,
+                 throttle_s: float | None = None, background: bool = True) -> checkpoint.Checkpointer:
+    """The node's checkpoints (``node.durable``: its parameters), written off the tick's path by a
+    thread of their own (``background``); ``make`` takes the snapshot in the tick. ``throttle_s``: at
+    most one warning that often (a node that writes every tick)."""
+    cfg, log = node.durable, node.get_logger()
+    warn = (lambda text: log.warning(text)) if throttle_s is None else \
+        (lambda text: log.warning(text, throttle_duration_sec=throttle_s))
+    return checkpoint.Checkpointer(cfg["checkpoint_dir"] if directory is None else directory, node.get_name(),
+                                   cfg["checkpoint_every"] if every is None else every, make, warn, background=background)
+
+
 def status(name: str, ck: checkpoint.Checkpointer, ticks: int, skipped: int) -> dict:
     """The node's checkpoint and rejoin health as a DiagnosticStatus dict."""
     level = 1 if ck.failed else 0
     return {"level": level, "name": f"{name}: checkpoints", "hardware_id": name,
             "message": ck.last_error or (f"last at tick {ck.last_ticks}" if ck.saved else "none written yet"),
             "values": {"learned_ticks": str(ticks), "written": str(ck.saved), "failed": str(ck.failed),
-                       "path": str(ck.path or ""), "skipped_ticks": str(skipped)}}
+                       "superseded": str(ck.superseded), "path": str(ck.path or ""), "skipped_ticks": str(skipped)}}
 
 
 class CheckpointedNode:
@@ -112,6 +124,7 @@ class CheckpointedNode:
         return [status(self.get_name(), self.checkpoints, self.ticks, getattr(self.host.stage.join, "skipped", 0))]
 
     def destroy_node(self):
+        self.checkpoints.close()  # what is on its way is written first
         if self.ticks > 0 and self.checkpoints.last_ticks != self.ticks:
             self.checkpoints.save()  # at shutdown (Ctrl-C, SIGTERM, the launcher's stop)
         return super().destroy_node()
@@ -134,9 +147,7 @@ class DurableWorld:
         from homeo_msgs_py.world_rejoin import RejoinPoint
 
         self.durable = cfg
-        self.checkpoints = checkpoint.Checkpointer(cfg["checkpoint_dir"], self.get_name(), cfg["checkpoint_every"],
-                                                   self.world_checkpoint,
-                                                   lambda text: self.get_logger().warning(text))
+        self.checkpoints = checkpointer(self, self.world_checkpoint)
         self.driver.on_step = self.checkpoints.after_tick
         self._rejoin = self._rejoin_since = None
         self._rejoin_pos = None
@@ -204,5 +215,6 @@ class DurableWorld:
         to rejoin keeps the one it was given)."""
         from homeo_msgs_py.lockstep import WAITING
 
+        self.checkpoints.close()  # what is on its way is written first
         if self.driver.state != WAITING and self._rejoin is None:
             self.checkpoints.save()

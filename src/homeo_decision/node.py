@@ -66,11 +66,8 @@ class DecisionNode(durable.CheckpointedNode, ScenarioNode):
         durable.setup_stage(self, self.host.stage, self.durable)
         self.ticks = 0  # ticks learned in all (the tick offset included)
         self._restore(durable.read_start(self, self.durable))
-        self.checkpoints = checkpoint.Checkpointer(
-            self.durable["checkpoint_dir"], DESC.name, self.durable["checkpoint_every"],
-            lambda: checkpoint.decision_checkpoint(self.core, self.ticks, max(0, self.host.stage.run),
-                                                  self.durable["session"]),
-            lambda text: self.get_logger().warning(text))
+        self.checkpoints = durable.checkpointer(self, lambda: checkpoint.decision_snapshot(
+            self.core, self.ticks, max(0, self.host.stage.run), self.durable["session"]))
         self.add_on_set_parameters_callback(self._on_params)
 
         self.pub = self.robot_publisher("action")

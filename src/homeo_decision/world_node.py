@@ -38,6 +38,9 @@ from .world_host import WorldHost
 
 DESC = NODES[WORLD]
 POLL_S = 0.02
+# a run that only needs its timeouts and status from the timer (a world that never blocks, at full speed):
+# the action wakes the node, not the timer, so fewer wake-ups of the executor each second
+IDLE_POLL_S = 0.1
 STATUS_PERIOD_S = 0.25  # at most this often while the run moves; at least once a second
 STATUS_IDLE_S = 1.0
 
@@ -84,7 +87,7 @@ class WorldNode(durable.DurableWorld, ScenarioNode):
         self.trigger("~/reset", self._reset)
         self._wait_logged = self._status_at = 0.0
         self._status_key = None
-        self.create_timer(POLL_S, self._poll)
+        self._timer = self.create_timer(POLL_S, self._poll)
 
     def _send(self, key: str, tick: int, fields: dict, run: int) -> None:
         self.send(self.pubs[key], tick, fields, run)
@@ -168,6 +171,9 @@ class WorldNode(durable.DurableWorld, ScenarioNode):
             drv.poll()
             if drv.state == DONE and self.host.trace is not None:
                 self.host.trace.flush()
+        period = int(poll_period(drv, self.world.blocking) * 1e9)
+        if self._timer.timer_period_ns != period:
+            self._timer.timer_period_ns = period
         key = (drv.state, drv.tick, drv.phase)
         now = time.monotonic()
         if (key != self._status_key and now - self._status_at >= STATUS_PERIOD_S) or now - self._status_at > STATUS_IDLE_S:
@@ -235,6 +241,14 @@ class WorldNode(durable.DurableWorld, ScenarioNode):
                 self.host.trace.close()
                 self.host.trace = None
         return super().destroy_node()
+
+
+def poll_period(drv, blocking: bool) -> float:
+    """How often the timer polls: ``IDLE_POLL_S`` while a run needs it only for its timeouts (a world
+    that never blocks, no rate to keep, no retry, a timeout ten periods long at least), else ``POLL_S``."""
+    quiet = (drv.state == RUNNING and not blocking and drv.rate == 0 and drv.phase != "retry"
+             and drv.timeout >= 10 * IDLE_POLL_S)
+    return IDLE_POLL_S if quiet else POLL_S
 
 
 def main(args=None) -> int:

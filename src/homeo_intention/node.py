@@ -62,11 +62,10 @@ class IntentionNode(durable.CheckpointedNode, ScenarioNode):
         self.ticks = self.tick_offset = 0
         if self.part.learns:
             self._restore(durable.read_start(self, self.durable))
-        self.checkpoints = checkpoint.Checkpointer(
-            self.durable["checkpoint_dir"] if self.part.learns else "", DESC.name, self.durable["checkpoint_every"],
-            lambda: intention_checkpoint(self.part.model, self.ticks, self.tick_offset, max(0, self.host.stage.run),
-                                         mode, self.durable["session"]),
-            lambda text: self.get_logger().warning(text))
+        self.checkpoints = durable.checkpointer(
+            self, lambda: intention_checkpoint(self.part.model, self.ticks, self.tick_offset, max(0, self.host.stage.run),
+                                               mode, self.durable["session"]),
+            directory=None if self.part.learns else "")
         self.pub = self.robot_publisher("intention")
         for i in DESC.reads(self.part.learns):
             self.subscribe(i.topic, lambda m, key=i.topic: self._put(key, m))
