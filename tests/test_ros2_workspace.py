@@ -201,8 +201,9 @@ def test_a_node_killed_under_ros2_launch_is_respawned_and_rejoins_the_run(ws, en
         end = time.monotonic() + 60
         while not ck.exists() and time.monotonic() < end:  # its first checkpoint (tick 100)
             time.sleep(0.2)
-        victim = subprocess.run(["pgrep", "-f", f"lib/{ros2cli.PACKAGE}/homeo-decision-node"], capture_output=True,
-                                text=True).stdout.split()
+        # this launch's decision node: launch and its nodes share the session ros2cli.popen began
+        victim = subprocess.run(["pgrep", "-s", str(launch.pid), "-f", f"lib/{ros2cli.PACKAGE}/homeo-decision-node"],
+                                capture_output=True, text=True).stdout.split()
         assert ck.exists() and len(victim) == 1, victim
         os.kill(int(victim[0]), signal.SIGKILL)
         out = launch.communicate(timeout=180)[0]
