@@ -30,11 +30,14 @@ def _ros2(args: list[str], env: dict, timeout: float = 60.0) -> subprocess.Compl
 
 
 def _say(text: str, env: dict) -> None:
-    """``ros2 topic pub --once --keep-alive 3 /homeo/human_input std_msgs/msg/String "{data: '...'}"``.
-    ``--once`` waits until the publisher has matched the robot's reader, but the robot may not yet
-    have matched the publisher (discovery runs both ways); with the default 0.1 s of keep-alive the
-    publisher is gone before the message is delivered again, and the wish was lost on a busy machine."""
-    r = _ros2(["topic", "pub", "--once", "--keep-alive", "3", "/homeo/human_input", "std_msgs/msg/String",
+    """``ros2 topic pub --once -w 2 --keep-alive 3 /homeo/human_input std_msgs/msg/String "{data: '...'}"``.
+    ``--once`` alone publishes as soon as one reader matched: with ``--record`` the wish has two (the
+    world node and the recorder), and the one that matched later never got it (the topic is volatile):
+    the CI lost a scold and a praise that way. ``-w 2`` waits for both (``ros2 topic info`` counts them,
+    checked below). ``--keep-alive 3``: the robot may not yet have matched the publisher when the
+    publisher matched it (discovery runs both ways); with the default 0.1 s the publisher is gone before
+    the message is delivered again."""
+    r = _ros2(["topic", "pub", "--once", "-w", "2", "--keep-alive", "3", "/homeo/human_input", "std_msgs/msg/String",
                yaml.safe_dump({"data": text})], env)
     assert r.returncode == 0, r.stderr
 
@@ -77,6 +80,8 @@ def test_the_play_the_human_walkthrough_with_the_ros2_command_line(tmp_path):
                              start_new_session=True)
     try:
         _wait_for_the_person(env, robot)
+        info = _ros2(["topic", "info", "/homeo/human_input"], env)
+        assert "Subscription count: 2" in info.stdout, info.stdout  # the README's -w 2
         # terminal 2: you. A wish starts the tick; after the robot acts, answer it.
         _say('{"intention": "music"}', env)
         time.sleep(1.0)  # a person reads a second later: the action is latched for them

@@ -183,9 +183,22 @@ def cmd_pub(args) -> int:
     ros = _Ros()
     try:
         pub = ros.node.create_publisher(String, TOPICS[key].name, pub_qos(key))
-        if not ros.spin_for(args.wait, lambda: pub.get_subscription_count() > 0):
-            print(f"{PROG}: note: no reader of {args.topic} matched within {args.wait:g} s; publishing anyway",
+        # every reader the graph knows of, matched: publishing when the first matched (``ros2 topic
+        # pub --once``) loses the message for a reader that matches later (a volatile topic), and a
+        # person's wish has two (the world node and the recorder of --record); a short settle lets a
+        # reader discovered a moment later count too
+        name = TOPICS[key].name
+
+        def all_matched() -> bool:
+            n = pub.get_subscription_count()
+            return n > 0 and n >= ros.node.count_subscribers(name)
+
+        if not ros.spin_for(args.wait, all_matched):
+            print(f"{PROG}: note: not every reader of {args.topic} matched within {args.wait:g} s; publishing anyway",
                   file=sys.stderr)
+        else:
+            ros.spin_for(0.3)
+            ros.spin_for(args.wait, all_matched)
         for i in range(args.times):
             pub.publish(String(data=text))
             if i + 1 < args.times:
