@@ -64,6 +64,17 @@ OPEN_CHOICES: dict[str, tuple[Any, Any]] = {
     # (ties: tie_break), or there is no dominant motivation, an extra internal state "none" (Sec 3.1.3:
     # "all activated motivations will compete"; Sec 4.2.3: "a robot without dominant motivation")
     "no_activated_motivation": ("argmax", ("argmax", "none")),
+    # a drive exactly at its threshold: Eq 3.2 activates its motivation ("0 if d_i < at_i", "otherwise"
+    # d_i + stimuli), Definition 3 calls it satisfied ("When d_i > at_i, d_i is considered unsatisfied") and
+    # Sec 3.3.1 has Serving "become active as soon as there's NAch" (NAch > 0): "eq_3_2" or "above"
+    "activation_boundary": ("eq_3_2", ("eq_3_2", "above")),
+    # a state's effect on the drives (the scenario's "ongoing" block: the charger charging the robot at it,
+    # Table 4.1 "Stay: NEng -20 if charging"), only through the actions whose Table 4.1 row states it
+    # ("actions": Attach and Stay), or on every tick that starts and ends in that state whatever the action
+    # ("every_tick": a plugged robot charges while it plays music or lights the room; Sec 3.3.2: "stay near
+    # the charger, allowing it to keep charging for one more iteration if attached"); an action whose own
+    # effects already change that drive is not changed twice
+    "ongoing_effects": ("actions", ("actions", "every_tick")),
     # intention recognition (Section 2.3; docs/INTENTION.md): the recogniser and the simulated user
     "intention_threshold": (0.0, (0.0, 1.0)),  # below this posterior the recognised intention is `none`
     "intention_prior_strength": (10.0, (0.0, 1e6)),  # textbook observations each prior CPD column is worth
@@ -282,6 +293,7 @@ def _scenario_from_dict(raw: Any, source: str, overrides: Mapping[str, Any] | No
     for o in obj_names:
         if not any(a.obj == o for a in actions):
             raise ScenarioError(f"{where}: object {o!r} has no actions")
+    ongoing = _parse_ongoing(raw.get("ongoing", []), dnames, check_cond, where)
 
     fb = raw.get("feedback", {})
     learning = dict(raw.get("learning", {}))
@@ -326,9 +338,33 @@ def _scenario_from_dict(raw: Any, source: str, overrides: Mapping[str, Any] | No
         observations=observations,
         rule_policy=rule_policy,
         reference=reference,
+        ongoing=ongoing,
     )
     _compile(sc)
     return sc
+
+
+def _parse_ongoing(block: Any, dnames: list, check_cond, where: str) -> tuple:
+    """The scenario's ``ongoing`` effects: a state's effect on drives per tick (open choice ``ongoing_effects``)."""
+    if not isinstance(block, list):
+        raise ScenarioError(f"{where}: ongoing must be a list of {{'when': condition, 'drives': {{drive: change}}}}")
+    out = []
+    for i, og in enumerate(block):
+        ctx = f"ongoing[{i}]"
+        if not isinstance(og, dict) or set(og) - {"name", "when", "drives", "description"} or "when" not in og \
+                or "drives" not in og:
+            raise ScenarioError(f"{where}: {ctx} must be an object with 'when' and 'drives' (and optional 'name', "
+                                "'description')")
+        check_cond(og["when"], ctx + ".when")
+        if not isinstance(og["drives"], dict) or not og["drives"]:
+            raise ScenarioError(f"{where}: {ctx}.drives must be a non-empty object of drive: change")
+        for dn, dv in og["drives"].items():
+            if dn not in dnames:
+                raise ScenarioError(f"{where}: {ctx} changes unknown drive {dn!r}")
+            if not isinstance(dv, (int, float)) or isinstance(dv, bool):
+                raise ScenarioError(f"{where}: {ctx}.drives.{dn} must be a number")
+        out.append({"name": str(og.get("name", f"ongoing{i}")), "when": dict(og["when"]), "drives": dict(og["drives"])})
+    return tuple(out)
 
 
 def _unique(names: Sequence, what: str, where: str) -> None:
