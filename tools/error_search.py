@@ -105,36 +105,58 @@ def params(o: dict) -> dict:
 
 def evaluate(o: dict, table_seeds: list[int], statement_seeds: list[int], dods=DOD_SEARCH, workers: int = 1,
              gate: float | None = GATE) -> dict:
-    """The 12 relative errors over ``table_seeds``, the criteria on each set of 20 of ``statement_seeds``."""
-    cfgs = j._configs(o, dods)
-    per_seed = dict(zip(table_seeds, [r.metrics for r in run_seeds(cfgs["base"], table_seeds, workers)]))
+    """The 12 relative errors over ``table_seeds``, the criteria on each set of 20 of ``statement_seeds``
+    (not run when the mean absolute error is above ``gate``)."""
+    e = evaluate_table(o, table_seeds, statement_seeds, workers)
+    if gate is None or e["mae"] <= gate:
+        add_statements(e, statement_seeds, dods, workers)
+    return e
+
+
+def evaluate_table(o: dict, table_seeds: list[int], statement_seeds: list[int], workers: int = 1) -> dict:
+    """The default run on ``table_seeds``: the 12 relative errors; the statements still to run (scored as
+    none held until ``add_statements``)."""
+    cfg = j._configs(o, ())["base"]
+    per_seed = dict(zip(table_seeds, [r.metrics for r in run_seeds(cfg, table_seeds, workers)]))
     rows = relative_errors(aggregate(list(per_seed.values()), DRIVES), SC.reference.metrics)
     errors = error_summary(rows)
-    out = {"open": o, "errors": {r["metric"]: r["error"] for r in rows}, "mae": errors["mean_abs_error"],
-           "means": {r["metric"]: r["mean"] for r in rows}, "text_distance": text_distance(o),
-           "table_seeds": [table_seeds[0], table_seeds[-1]], "statement_seeds": [statement_seeds[0], statement_seeds[-1]]}
+    e = {"open": o, "errors": {r["metric"]: r["error"] for r in rows}, "mae": errors["mean_abs_error"],
+         "means": {r["metric"]: r["mean"] for r in rows}, "text_distance": text_distance(o),
+         "table_seeds": [table_seeds[0], table_seeds[-1]], "statement_seeds": [statement_seeds[0], statement_seeds[-1]],
+         "met_per_set": None, "shares": None, "n_sets": len(seed_sets(statement_seeds)),
+         "goals": dict(errors["goals"], statements_per_set=False), "_base": per_seed}
+    e["score"] = score(e)
+    return e
+
+
+def add_statements(e: dict, statement_seeds: list[int], dods=DOD_SEARCH, workers: int = 1) -> dict:
+    """The criteria on each set of 20 of ``statement_seeds`` for the point ``e`` of ``evaluate_table``."""
+    o, per_seed = e["open"], e.pop("_base", {})
+    cfgs = j._configs(o, dods)
+    runs = {}
+    for lab, cfg in cfgs.items():
+        if lab == "base":
+            missing = [s for s in statement_seeds if s not in per_seed]
+            if missing:
+                per_seed.update(zip(missing, [r.metrics for r in run_seeds(cfg, missing, workers)]))
+            runs[lab] = [per_seed[s] for s in statement_seeds]
+        else:
+            runs[lab] = [r.metrics for r in run_seeds(cfg, statement_seeds, workers)]
+    runs["pseudo=True"] = runs["base"]  # the default run has the pseudo update on
+    idx = {s: i for i, s in enumerate(statement_seeds)}
     sets = seed_sets(statement_seeds)
-    if gate is not None and errors["mean_abs_error"] > gate:
-        out.update(met_per_set=None, shares=None, n_sets=len(sets))
-    else:
-        runs = {}
-        for lab, cfg in cfgs.items():
-            if lab == "base":
-                missing = [s for s in statement_seeds if s not in per_seed]
-                if missing:
-                    per_seed.update(zip(missing, [r.metrics for r in run_seeds(cfg, missing, workers)]))
-                runs[lab] = [per_seed[s] for s in statement_seeds]
-            else:
-                runs[lab] = [r.metrics for r in run_seeds(cfg, statement_seeds, workers)]
-        runs["pseudo=True"] = runs["base"]  # the default run has the pseudo update on
-        idx = {s: i for i, s in enumerate(statement_seeds)}
-        M_sets = [{lab: aggregate([v[idx[s]] for s in st], DRIVES) for lab, v in runs.items()} for st in sets]
-        sh = statement_shares(SC.reference.criteria, M_sets, {**SWEEPS, "dod": tuple(dods)}, {"dod": cfgs["base"].dod})
-        out.update(met_per_set=sh["met_per_set"], shares={s["id"]: s["held"] for s in sh["shares"]}, n_sets=len(sets))
-    out["goals"] = dict(errors["goals"], statements_per_set=out["met_per_set"] is not None and min(
-        out["met_per_set"]) >= GOALS["statements_per_set"] * len(SC.reference.criteria))
-    out["score"] = score(out)
-    return out
+    M_sets = [{lab: aggregate([v[idx[s]] for s in st], DRIVES) for lab, v in runs.items()} for st in sets]
+    sh = statement_shares(SC.reference.criteria, M_sets, {**SWEEPS, "dod": tuple(dods)}, {"dod": cfgs["base"].dod})
+    e.update(met_per_set=sh["met_per_set"], shares={x["id"]: x["held"] for x in sh["shares"]}, n_sets=len(sets))
+    e["goals"]["statements_per_set"] = min(e["met_per_set"]) >= GOALS["statements_per_set"] * len(SC.reference.criteria)
+    e["score"] = score(e)
+    return e
+
+
+def table_part(e: dict) -> float:
+    """The score without its statement terms (what the table alone decides)."""
+    return score({**e, "met_per_set": [0] * e["n_sets"]}) + W_SHORT * e["n_sets"] * GOALS["statements_per_set"] * len(
+        SC.reference.criteria)
 
 
 def score(e: dict) -> float:
@@ -184,6 +206,7 @@ def search(trials: int, table_seeds: list[int], statement_seeds: list[int], out:
     with (out / "trials.jsonl").open("w") as log:
         def objective(trial):
             e = evaluate(suggest(trial, start), table_seeds, statement_seeds, workers=workers, gate=gate)
+            e.pop("_base", None)
             e["trial"] = trial.number
             evals.append(e)
             log.write(json.dumps(e) + "\n")
@@ -193,6 +216,91 @@ def search(trials: int, table_seeds: list[int], statement_seeds: list[int], out:
 
         study.optimize(objective, n_trials=trials)
     return evals
+
+
+# -- refinement: a greedy walk from the best point ------------------------------------------------------
+
+# grid steps a neighbour moves by (multiples of the suggest() grid): the initial Q value and how busy the human
+# is were the strongest levers of issue 15 and of issue 25's first measurements
+WIDE_STEPS = {"initial_q": (1, 2, 4), "human_no_intention_prob": (1, 2)}
+
+
+def _space(optuna) -> dict:
+    """The distributions of ``suggest``'s parameters."""
+    class Probe:
+        def __init__(self):
+            self.d = {}
+
+        def suggest_float(self, name, low, high, step=None):
+            self.d[name] = optuna.distributions.FloatDistribution(low, high, step=step)
+            return low
+
+        def suggest_categorical(self, name, choices):
+            self.d[name] = optuna.distributions.CategoricalDistribution(choices)
+            return choices[0]
+
+    p = Probe()
+    suggest(p, current_open())
+    return p.d
+
+
+def neighbours(o: dict) -> list[dict]:
+    """Each searched choice moved alone: a float by the steps of ``WIDE_STEPS`` (one grid step by default)
+    either way, a categorical to each other value; absence settings only while the human can leave."""
+    import optuna
+
+    space, here, out = _space(optuna), params(o), []
+    for name, dist in space.items():
+        if name in ("human_return_prob", "on_leave_effects") and not o["human_leave_prob"]:
+            continue
+        if isinstance(dist, optuna.distributions.FloatDistribution):
+            values = [round(here[name] + sign * k * dist.step, 6) for k in WIDE_STEPS.get(name, (1,)) for sign in (-1, 1)]
+            values = [v for v in values if dist.low <= v <= dist.high]
+        else:
+            values = [c for c in dist.choices if c != here[name]]
+        out += [suggest(optuna.trial.FixedTrial({**here, name: v}), o) for v in values]
+    return out
+
+
+def refine(start: dict, table_seeds: list[int], statement_seeds: list[int], out: Path, rounds: int, top: int,
+           workers: int) -> dict:
+    """From ``start``, each round scores every neighbour on the table alone, runs the statements for the ``top``
+    best by that, and moves to the best full score if it beats the current point; stops when none does."""
+    out.mkdir(parents=True, exist_ok=True)
+    t0, n = time.time(), 0
+    seen: dict[str, dict] = {}
+
+    def logged(e, what):
+        nonlocal n
+        e.pop("_base", None)
+        e["trial"] = n
+        n += 1
+        log.write(json.dumps(e) + "\n")
+        log.flush()
+        print(f"{what} {e['trial']:4d}: {line(e)}  {diff(e['open'], start)}  ({time.time() - t0:.0f} s)",
+              file=sys.stderr, flush=True)
+        return e
+
+    with (out / "refine.jsonl").open("w") as log:
+        cur = logged(evaluate(start, table_seeds, statement_seeds, workers=workers, gate=None), "start")
+        seen[json.dumps(start, sort_keys=True)] = cur
+        for r in range(rounds):
+            tables = []
+            for o in neighbours(cur["open"]):
+                key = json.dumps(o, sort_keys=True)
+                if key not in seen:
+                    seen[key] = e = evaluate_table(o, table_seeds, statement_seeds, workers)
+                    tables.append(e)
+            tables.sort(key=lambda e: -table_part(e))
+            full = [logged(add_statements(e, statement_seeds, workers=workers), f"round {r} full ") for e in tables[:top]]
+            for e in tables[top:]:
+                logged(e, f"round {r} table")
+            best = max(full, key=lambda e: e["score"], default=None)
+            if best is None or best["score"] <= cur["score"]:
+                break
+            cur = best
+            print(f"round {r}: moved to {diff(cur['open'], start)}", file=sys.stderr, flush=True)
+    return cur
 
 
 def read_trials(path: str) -> list[dict]:
@@ -288,11 +396,18 @@ def build_parser() -> Parser:
     v.add_argument("--best", type=int_at_least(1), default=8)
     v.add_argument("--seeds", default="3000-3099", help="table and statement seeds (default 3000-3099)")
     v.add_argument("--out", default="calibrate-errors")
+    r = sub.add_parser("refine", help="a greedy walk over one-step neighbours from the best trial of a search")
+    r.add_argument("--from", dest="trials_file", required=True, metavar="TRIALS.jsonl")
+    r.add_argument("--search-seeds", default="2000-2099")
+    r.add_argument("--statement-seeds", default="2000-2039")
+    r.add_argument("--rounds", type=int_at_least(1), default=8)
+    r.add_argument("--top", type=int_at_least(1), default=5, help="neighbours per round whose statements are run")
+    r.add_argument("--out", default="calibrate-errors")
     c = sub.add_parser("confirm", help="the current default (or a change of it) on seeds no search used")
     c.add_argument("--seeds", default="5000-5099", help="table and statement seeds (default 5000-5099)")
     c.add_argument("--change", action="append", default=[], metavar="KEY=JSON[,KEY=JSON]",
                    help="a point to score: the default with these changes (repeat for several points)")
-    for p in (s, v, c):
+    for p in (s, v, r, c):
         p.add_argument("--workers", type=int_at_least(1), default=1)
     return ap
 
@@ -304,6 +419,13 @@ def main(argv=None) -> int:
         if a.cmd == "search":
             t_seeds, s_seeds = seeds_arg(a.search_seeds), seeds_arg(a.statement_seeds)
             search(a.trials, t_seeds, s_seeds, Path(a.out), a.sampler_seed, a.workers, a.gate)
+            return 0
+        if a.cmd == "refine":
+            t_seeds, s_seeds = seeds_arg(a.search_seeds), seeds_arg(a.statement_seeds)
+            best = best_distinct(read_trials(a.trials_file), 1)[0]
+            cur = refine(best["open"], t_seeds, s_seeds, Path(a.out), a.rounds, a.top, a.workers)
+            print(f"refined: {line(cur)}\n```json\n" + json.dumps({k: cur["open"][k] for k in SEARCHED}, indent=1)
+                  + "\n```")
             return 0
         seeds = seeds_arg(a.seeds)
         if a.cmd == "validate":

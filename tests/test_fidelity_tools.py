@@ -1,5 +1,6 @@
-"""Issue 25's search tool (tools/error_search.py): its objective by hand, the seeds it keeps apart, and
-its inputs (seed sets, changes, a trials file, any argument list): a value or one line, exit 2."""
+"""Issue 25's tools (tools/error_search.py, tools/dod_shape.py): the objective and the DoD line by hand, the
+seeds kept apart, and their inputs (seed sets, changes, a trials file, any argument list): a value or one
+line, exit 2."""
 
 from __future__ import annotations
 
@@ -155,3 +156,66 @@ def test_a_trials_file_is_read_or_one_line(tmp_path, lines):
         assert "\n" not in str(exc) and str(exc).startswith(str(f))
         return
     assert got and all(isinstance(e["open"], dict) for e in got)
+
+
+def test_the_neighbourhood_by_hand():
+    pytest.importorskip("optuna")
+    es = _es()
+    start = es.current_open()
+    got = es.neighbours(start)
+    # floats: initial_q 15 by 0.5, 1 and 2 either way (6), scold 2 +-1 (2), p_none 0.35 by 0.05 and 0.1 either
+    # way (4), proposal prob 0.8 +-0.1 (2); human_return_prob and on_leave_effects not while nobody leaves.
+    # categoricals: serving_growth 2, reward_span, tie_break, value_max_over, metrics_sample 1 each, leave prob 4,
+    # proposal choice 2, invalid_actions 1, always-valid 3, time_increase 1, growth NSoc 2, NRes 2, NEng 1,
+    # no_activated_motivation 1, ongoing_effects 1, activation_boundary 1
+    assert len(got) == 14 + 2 + 4 + 4 + 2 + 1 + 3 + 1 + 5 + 1 + 1 + 1 == 39
+    for o in got:
+        assert sum(o[k] != start[k] for k in es.SEARCHED) == 1
+    assert sorted(o["initial_q"] for o in got if o["initial_q"] != start["initial_q"]) == [13, 14, 14.5, 15.5, 16, 17]
+
+
+def test_the_table_part_leaves_out_the_statements():
+    es = _es()
+    e = _point([0.05] * 12, [10, 9], text=1)
+    assert es.table_part(e) == pytest.approx(-5 - 1)
+    assert es.table_part({**e, "met_per_set": None}) == pytest.approx(-5 - 1)
+
+
+def _dod():
+    if str(TOOLS) not in sys.path:
+        sys.path.insert(0, str(TOOLS))
+    return importlib.import_module("dod_shape")
+
+
+def test_the_dod_line_by_hand():
+    ds = _dod()
+    grid = [round(i / 10, 1) for i in range(11)]
+    # two seeds; RSR 0.9 - 0.9 x DoD on one, a plateau at 0.9 to DoD 0.3 then the same fall on the other
+    c = {d: {"RSR": [0.9 - 0.9 * d, min(0.9, 1.2 - 1.2 * d)], "HSR": [0.5, 0.5]} for d in grid}
+    sh = ds.shape(c, [0])
+    assert sh["at_half"] == pytest.approx(0.0) and abs(sh["largest"][1]) < 1e-9
+    both = ds.shape(c, [0, 1])
+    # mean RSR(0) 0.9, RSR(1) 0, RSR(0.5) (0.45 + 0.6) / 2 = 0.525: 0.075 above the line; largest at 0.3:
+    # (0.63 + 0.84) / 2 = 0.735 against 0.63, +0.105
+    assert both["at_half"] == pytest.approx(0.075)
+    assert both["largest"][0] == 0.3 and both["largest"][1] == pytest.approx(0.105)
+
+
+@FAST
+@given(args=st.lists(st.text(max_size=12) | st.sampled_from(["--seeds", "--change", "--workers", "0", "5000-5099",
+                                                             "initial_q=3", "-5"]), max_size=5))
+def test_dod_shape_arguments_parse_or_are_one_line(args):
+    from homeo_msgs_py.cli_args import UserError
+
+    if any(a.startswith("-h") or a.startswith("--h") for a in args):
+        return
+    try:
+        _dod().build_parser().parse_args(args)
+    except UserError as exc:
+        assert "\n" not in str(exc)
+
+
+def test_dod_shape_refuses_a_bad_change_on_one_line():
+    proc = subprocess.run([sys.executable, str(TOOLS / "dod_shape.py"), "--seeds", "1-2", "--change", "tie_break=\"x\""],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1 and "tie_break" in proc.stderr
