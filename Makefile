@@ -29,7 +29,7 @@ run: setup
 # its own ROS domains and data directory (tests/rosgraph.py, tests/conftest.py)
 WORKERS ?= 2
 
-test: setup ros2-tools profile-setup
+test: setup ros2-tools profile-setup calibrate-setup
 	$(BIN)/python -m pytest -q -n $(WORKERS)
 
 # the core, the graph's equivalence with the in-process runner, and the launch tests (ros2 launch in a
@@ -57,7 +57,8 @@ bench: setup
 report: setup
 	$(BIN)/homeo-sim report --out out/report --seeds 10
 
-# the joint search's tool dependency (tools/calibrate.py --joint; docs/FIDELITY.md), not the runtime's
+# the searches' tool dependency (tools/calibrate.py --joint, tools/error_search.py; docs/FIDELITY.md), not the
+# runtime's; `make test` installs it so that their tests run
 calibrate-setup: setup
 	$(BIN)/pip install --disable-pip-version-check -q --no-deps -r tools/requirements-calibrate.lock
 

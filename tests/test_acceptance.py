@@ -26,31 +26,32 @@ def test_table_4_5_targets_over_20_seeds():
     assert proc.returncode == 0, proc.stderr
     m = json.loads(proc.stdout)["metrics"]
     assert m["HSR"]["mean"] >= 0.78
-    # issue 2 asked RSR >= 0.85. Issue 15's open block (docs/FIDELITY.md, "Joint search") gives up some RSR
-    # for Table 4.5 as a whole (2 -> 4-6 of 12 numbers inside the interval, by seed set) and the text's
-    # statements (5 -> 10 of 10): measured 0.825 [0.796, 0.854] over seeds 0-19 (0.817 on the confirmation
-    # seeds 200-219), against 0.859 before. The bound guards that level; the thesis's 0.90 stays unreached.
-    assert m["RSR"]["mean"] >= 0.78
+    # issue 2 asked RSR >= 0.85. Issue 15's open block gave up some RSR (0.825 over seeds 0-19); issue 25's
+    # (docs/FIDELITY.md) has 0.853 [0.823, 0.883] over seeds 0-19 and 0.879 over the 100 confirmation seeds
+    # (thesis 0.90). The bound guards the level of 20 seeds with room for their spread.
+    assert m["RSR"]["mean"] >= 0.80
     assert m["CEDA"]["all"]["mean"] <= 6.0
     assert m["CDA"]["NAch"]["mean"] <= 5.0
 
 
-def test_issue_15_fidelity_on_held_out_seeds():
-    # issue 15: the Table 4.5 numbers inside our 95% interval, on the 20 confirmation seeds that the joint
-    # search and its validation never used (homeo-sim run --seeds 20 --first-seed 200). Measured: 6 of 12
-    # (CDA NAch, CDA NRes, CDA all, CEDA NAch, CEDA NSoc, CEDA NRes); the issue asks at least 6. Other
-    # sets of 20 seeds give 4 to 6 (docs/FIDELITY.md, "Third stage"): this guards the confirmation itself.
-    # (The same six on seeds 0-19.)
+def test_issue_25_table_goals_on_the_confirmation_seeds():
+    # issue 25: over 100 seeds that no search used (5000-5099, the confirmation of docs/FIDELITY.md), the mean
+    # absolute relative error of the 12 numbers of Table 4.5 at most 8%, each within 15%, HSR and RSR within 5%.
+    # Measured: 4.7%, the largest CEDA NRes -13.1% (CDA NEng -12.8%), HSR -2.4%, RSR -2.3%. (The statements on
+    # the five 20-seed sets, 9 of 10 on each, need the sweeps: homeo-sim report --seeds 100 --first-seed 5000.)
     from homeo_decision.scenario import load_scenario
-    from homeo_sim.report.fidelity import table_score
+    from homeo_sim.report.fidelity import GOALS, error_summary, relative_errors
 
-    proc = subprocess.run([sys.executable, "-m", "homeo_sim.cli", "run", "--seeds", "20", "--first-seed", "200",
-                           "--json", "--quiet"], capture_output=True, text=True, timeout=600)
+    proc = subprocess.run([sys.executable, "-m", "homeo_sim.cli", "run", "--seeds", "100", "--first-seed", "5000",
+                           "--json", "--quiet"], capture_output=True, text=True, timeout=900)
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
-    assert out["seeds"] == list(range(200, 220))
-    rows = table_score(out["metrics"], load_scenario().reference.metrics)
-    assert sum(r["inside"] for r in rows) >= 6, [(r["metric"], r["inside"]) for r in rows]
+    assert out["seeds"] == list(range(5000, 5100))
+    rows = relative_errors(out["metrics"], load_scenario().reference.metrics)
+    e = error_summary(rows)
+    assert e["goals"] == {"mean_error": True, "each_error": True, "headline_error": True}, \
+        [(r["metric"], round(r["error"], 3)) for r in rows]
+    assert e["mean_abs_error"] <= GOALS["mean_error"]
 
 
 def _mean(cfg: RunConfig, seeds=range(10)) -> dict:

@@ -102,8 +102,57 @@ def test_summary_counts_inside_and_met():
     M["base"] = agg(s(0.80, 0.79, 0.81), s(0.88, 0.85, 0.91))
     f = fidelity(ref, M, SWEEPS, {"dod": 0.25})
     assert (f["table_inside"], f["table_total"], f["statements_met"], f["statements_total"]) == (3, 6, 1, 2)
-    assert f["summary"] == "Table 4.5: 3/6 inside CI; statements: 1/2"
+    # errors: HSR 0.80/0.82 - 1, RSR 0.88/0.90 - 1, CDA D 40/43.5 - 1, CDA all 30/32.5 - 1, CEDA D 2/2.05 - 1,
+    # CEDA all 4/4.12 - 1; the largest is CDA D's -8.05%, all within 15%; one set (M itself), 1 of 2 statements
+    errs = [0.80 / 0.82 - 1, 0.88 / 0.90 - 1, 40 / 43.5 - 1, 30 / 32.5 - 1, 2 / 2.05 - 1, 4 / 4.12 - 1]
+    assert [r["error"] for r in f["table"]] == pytest.approx(errs)
+    assert f["errors"]["mean_abs_error"] == pytest.approx(sum(abs(e) for e in errs) / 6)
+    assert f["summary"] == ("Table 4.5: mean |error| 4.3%, largest CDA D -8%, 6/6 within 15%, HSR -2.4%, RSR -2.2%; "
+                            "statements per 1-seed set: 1 of 2")  # M's one seed per run: one set of one seed
+    assert f["goals"] == {"mean_error": True, "each_error": True, "headline_error": True, "statements_per_set": False}
     assert fidelity(None, M, SWEEPS)["table"] == []
+
+
+def test_relative_errors_and_their_goals_by_hand():
+    from homeo_sim.report.fidelity import error_summary, relative_errors
+
+    a = agg(s(0.779, 0.7, 0.8), s(0.90, 0.85, 0.91))
+    rows = relative_errors(a, {"HSR": 0.82, "RSR": 0.90, "CDA": {"D": 50.0}})
+    assert [(r["metric"], round(r["error"], 6)) for r in rows] == [("HSR", -0.05), ("RSR", 0.0), ("CDA.D", -0.2)]
+    e = error_summary(rows)
+    assert e["mean_abs_error"] == pytest.approx(0.25 / 3) and e["largest"] == "CDA.D" and e["within_each"] == 2
+    # 8.3% > 8%: not met; CDA D's 20% > 15%: not met; HSR exactly 5% is within 5%
+    assert e["goals"] == {"mean_error": False, "each_error": False, "headline_error": True}
+    rows[2]["error"] = -0.15
+    # now (5 + 0 + 15) / 3 = 6.7% <= 8%, and 15% is within 15%
+    assert error_summary(rows)["goals"] == {"mean_error": True, "each_error": True, "headline_error": True}
+    rows[0]["error"] = -0.0501
+    assert error_summary(rows)["goals"]["headline_error"] is False
+
+
+def test_seed_sets_are_disjoint_runs_of_twenty():
+    from homeo_sim.report.fidelity import seed_sets
+
+    assert seed_sets(range(100)) == [list(range(i, i + 20)) for i in range(0, 100, 20)]
+    assert seed_sets(range(45)) == [list(range(20)), list(range(20, 40))]  # 40-44 in no set
+    assert seed_sets(range(7)) == [list(range(7))] and seed_sets([]) == []
+    assert seed_sets([5, 9, 2], size=2) == [[5, 9]]
+
+
+def test_statement_shares_count_sets_by_hand():
+    from homeo_sim.report.fidelity import statement_shares
+
+    crits = [C("below", at="xi=0.0", metric="RSR", value=0.4), C("near", at="dod=0.0", metric="HSR", value=0.6, tol=0.1)]
+    good, bad = M_fake(), M_fake()
+    bad["xi=0.0"] = bad["xi=2.0"]  # RSR(xi 0) 0.95: the first statement fails on this set
+    sh = statement_shares(crits, [good, bad, good], SWEEPS, {"dod": 0.25})
+    assert sh["met_per_set"] == [2, 1, 2]
+    assert [(x["held"], x["of"], x["per_set"]) for x in sh["shares"]] == [(2, 3, [True, False, True]), (3, 3, [True] * 3)]
+    f = fidelity(ReferenceSpec("src", REF, None, tuple(crits)), good, SWEEPS, {"dod": 0.25}, M_sets=[good, bad, good],
+                 n_seeds=6)
+    assert f["statements_per_set"] == [2, 1, 2] and f["goals"]["statements_per_set"] is False  # 1 < 0.9 x 2
+    assert f["summary"].endswith("statements per 2-seed set: 2, 1, 2 of 2") and "over 6 seeds" in f["summary"]
+    assert [st["held"] for st in f["statements"]] == [2, 3]
 
 
 # -- the thesis scenario's criteria ---------------------------------------------------------
@@ -267,5 +316,6 @@ def test_no_activated_motivation_none_runs_through_the_messages():
     fields = decode(encode("homeo/drives", 1, fields), codec.vocabulary(sc), "homeo/drives").fields
     json.dumps(fields)
     assert codec.perception_from_fields(sc, fields)[0][3] == sc.none_state
+
 
 

@@ -44,7 +44,7 @@ def _replace(obj, path, value):
     return out
 
 
-SCENARIO_PLACES = [p for p in _paths(SCENARIO) if p and p[0] in ("rule_policy", "reference", "open")]
+SCENARIO_PLACES = [p for p in _paths(SCENARIO) if p and p[0] in ("rule_policy", "reference", "open", "ongoing")]
 CONFIG_PLACES = list(_paths(CONFIG))
 
 
@@ -68,4 +68,5 @@ def test_any_value_anywhere_in_the_pepper_config_is_a_config_or_a_one_line_error
 
 def test_the_places_cover_the_new_blocks():
     assert any(p[0] == "rule_policy" for p in SCENARIO_PLACES) and any(p[0] == "reference" for p in SCENARIO_PLACES)
+    assert any(p[0] == "ongoing" for p in SCENARIO_PLACES)  # issue 25
     assert len(CONFIG_PLACES) > 40

@@ -126,15 +126,19 @@ def test_report_writes_pngs_and_markdown(tmp_path):
         assert (tmp_path / p).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     md = (tmp_path / "report.md").read_text()
     for needle in ("Table 4.5", "Fig 4.3", "Fig 4.4", "Fig 4.5", "Baselines", "adaptive DoD", "Trend checks",
-                   "| HSR | | ", " 0.82 |", "Wall time", "## Fidelity score", "| HSR | ", "inside CI; statements: "):
+                   "| HSR | | ", " 0.82 |", "Wall time", "## Fidelity score", "| HSR | ", "statements per 2-seed set: ",
+                   "Goals (issue 25)"):
         assert needle in md, needle
     assert len(data["checks"]) == 9 and all(isinstance(c["ok"], bool) for c in data["checks"])
     assert all(c["why"] for c in data["checks"] if not c["ok"])  # a failing check always says why
     res = json.loads((tmp_path / "results.json").read_text())
     f = res["fidelity"]  # issue 15: the fidelity score, 12 numbers of Table 4.5 and the 10 statements
     assert f["table_total"] == 12 and f["statements_total"] == 10 and len(res["statements"]) == 10
-    assert f["summary"] == f"Table 4.5: {f['table_inside']}/12 inside CI; statements: {f['statements_met']}/10"
-    assert f["table_inside"] == sum(r["inside"] for r in f["table"]) and f"**{f['summary']}.**" in md
+    assert f["summary"].startswith("Table 4.5 over 2 seeds: mean |error| ") and f"**{f['summary']}.**" in md
+    assert f["summary"].endswith("statements per 2-seed set: %d of 10" % f["statements_per_set"][0])
+    assert f["errors"]["mean_abs_error"] == pytest.approx(sum(abs(r["error"]) for r in f["table"]) / 12)
+    assert f["table_inside"] == sum(r["inside"] for r in f["table"])
+    assert all(st["of"] == 1 for st in res["statements"])  # two seeds: one set
     assert res["policies"]["rule"]["metrics"]["HSR"]["per_seed"] == data["policies"]["rule"]["metrics"]["HSR"]["per_seed"]
 
 

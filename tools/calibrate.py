@@ -53,28 +53,30 @@ DRIVES = _THESIS.drive_names
 # ---------------------------------------------------------------------------
 # the configuration this calibration recommends (the "open" block of thesis.json)
 
-CHOSEN: dict = {  # chosen by the joint search of issue 15 (--joint, trial 103); see docs/FIDELITY.md
+CHOSEN: dict = {  # chosen by issue 25's search (tools/error_search.py: refine point 149); see docs/FIDELITY.md
     "initial_drives": {"NAch": 0, "NSoc": 0, "NRes": 0, "NEng": 0},
     "initial_location": "R",
     "initial_objects": {"charger.status": "idle", "player.status": "idle", "light.status": "off"},
-    "initial_q": 15.0,
+    "initial_q": 16.5,
     "scold_drive_change": 2.0,
     "serving_growth": "unsatisfied",
     "reward_span": "action",
     "on_leave_effects": True,
-    "tie_break": "first",
-    "value_max_over": "all",
-    "metrics_sample": "end",
+    "tie_break": "last",
+    "value_max_over": "valid",
+    "metrics_sample": "after_action",
     "invalid_actions": "excluded",
     "always_valid_actions": [],
     "time_increase": "after_action",
     "drive_growth": {},
     "no_activated_motivation": "argmax",
-    "human_no_intention_prob": 0.35,
+    "ongoing_effects": "every_tick",
+    "activation_boundary": "eq_3_2",
+    "human_no_intention_prob": 0.2,
     "human_leave_prob": 0.0,
     "human_return_prob": 1.0,
     "human_proposal_choice": "random",
-    "human_proposal_prob": 0.9,
+    "human_proposal_prob": 0.7,
 }
 
 # ---------------------------------------------------------------------------
@@ -271,6 +273,8 @@ ALTERNATIVES: list[tuple[str, list]] = [
     ("drive_growth", [{}, {"NSoc": "human_not_near"}, {"NSoc": "not_lowered"}, {"NRes": "robot_moved"},
                       {"NRes": "not_lowered"}]),
     ("no_activated_motivation", ["argmax", "none"]),
+    ("ongoing_effects", ["actions", "every_tick"]),  # issue 25, the readings of the energy drive
+    ("activation_boundary", ["eq_3_2", "above"]),
     ("initial_drives", [{"NAch": 0, "NSoc": 0, "NRes": 0, "NEng": 0}, {"NAch": 50, "NSoc": 50, "NRes": 50, "NEng": 50},
                         {"NAch": 0, "NSoc": 0, "NRes": 0, "NEng": 90}]),
     ("initial_location", ["R", "H", "C"]),

@@ -211,8 +211,9 @@ def _seeds(spec: str) -> list[int]:
     return list(range(lo, hi + 1))
 
 
-def current_open() -> dict:
-    return {k: getattr(SC.open, k) for k in SEARCHED}
+def current_open(keys=None) -> dict:
+    """The scenario's searched choices as a search writes them (JSON values: a tuple as a list)."""
+    return json.loads(json.dumps({k: getattr(SC.open, k) for k in (keys or SEARCHED)}))
 
 
 # the hints of a resumed search (issue 15, second part): the new readings one at a time around the default

@@ -42,7 +42,7 @@ class Perceiving:
     perception computed elsewhere; a policy adds its own states (``_states``)."""
 
     def _init_perception(self, sc: Scenario) -> None:
-        self.thresholds = [d.threshold for d in sc.drives]
+        self.thresholds = sc.activation_thresholds  # Eq 3.2 (open choice activation_boundary)
         self.tie_break = sc.open.tie_break
         self.none_state = sc.none_state
         self.stim = sc.c.stim

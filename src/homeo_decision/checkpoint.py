@@ -87,7 +87,7 @@ def check_envelope(raw, node: str, where: str) -> dict:
 # -- the world nodes' parts (homeo_sim.checkpoint, pepper_bridge.checkpoint) ----------------------------
 def scenario_print(sc) -> str:
     """The scenario a world checkpoint was written under: a restart must run the same one."""
-    return digest({"raw": sc.raw, "open": sc.open.as_dict()})
+    return digest({"raw": sc.raw, "open": sc.open.printed()})
 
 
 def codes_print(sc) -> str:

@@ -73,7 +73,7 @@ class Perception:
 
     def __init__(self, sc: Scenario):
         self.sc = sc
-        self.thresholds = [d.threshold for d in sc.drives]
+        self.thresholds = sc.activation_thresholds  # Eq 3.2 (open choice activation_boundary)
         self.tie_break = sc.open.tie_break
         self.none_state = sc.none_state
         self.stim = sc.c.stim

@@ -285,6 +285,9 @@ def cmd_report(args) -> int:
     print(f"trend checks: {len(data['checks']) - len(fails)}/{len(data['checks'])} reproduced"
           + (f"; not reproduced: {'; '.join(fails)}" if fails else ""))
     print(f"fidelity: {data['fidelity']['summary']}")
+    goals = data["fidelity"].get("goals")
+    if goals:  # issue 25's targets (homeo_sim.report.fidelity.GOALS)
+        print("goals: " + ", ".join(f"{k.replace('_', ' ')} {'met' if ok else 'not met'}" for k, ok in goals.items()))
     return 0
 
 

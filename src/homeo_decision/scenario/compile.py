@@ -100,6 +100,8 @@ def _compile(sc: Scenario) -> None:
     # "has no effect", leave them selectable but idle (open choices invalid_actions, always_valid_actions)
     all_of_a = sc.open.invalid_actions == "no_effect"
     unconstrained = frozenset(sc.open.always_valid_actions)
+    # open choice ongoing_effects: a state's effect on the drives on every tick that starts and ends in it
+    ongoing = sc.ongoing if sc.open.ongoing_effects == "every_tick" else ()
     for code, (view, idx) in enumerate(zip(views, codes_vals)):
         s = [0.0] * len(motivs)
         present = []
@@ -134,7 +136,15 @@ def _compile(sc: Scenario) -> None:
                             new[k] = base_values[k].index(val)
             if new[loc_k] != idx[loc_k] and idx[rel_k] != absent:  # the robot moved: relation from the locations
                 new[rel_k] = located[new[loc_k]]
-            nxt.append(encode(new))
+            nc = encode(new)
+            own = tuple(delta)  # the action's own effects: an ongoing effect does not add to a drive they change
+            for og in ongoing:
+                if _holds(og["when"], view) and _holds(og["when"], views[nc]):
+                    for dn, dv in og["drives"].items():
+                        k = dnames.index(dn)
+                        if own[k] == 0.0:
+                            delta[k] += float(dv)
+            nxt.append(nc)
             dd.append(tuple(delta))
         next_code.append(tuple(nxt))
         drive_delta.append(tuple(dd))

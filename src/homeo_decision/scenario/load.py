@@ -235,6 +235,7 @@ def _scenario_from_dict(raw: Any, source: str, overrides: Mapping[str, Any] | No
     for o in obj_names:
         if not any(a.obj == o for a in actions):
             raise ScenarioError(f"{where}: object {o!r} has no actions")
+    ongoing = _parse_ongoing(raw.get("ongoing", []), dnames, check_cond, where)
 
     fb = raw.get("feedback", {})
     learning = _check_learning(raw.get("learning", {}), len(drives), where)
@@ -275,9 +276,33 @@ def _scenario_from_dict(raw: Any, source: str, overrides: Mapping[str, Any] | No
         observations=observations,
         rule_policy=rule_policy,
         reference=reference,
+        ongoing=ongoing,
     )
     _compile(sc)
     return sc
+
+
+def _parse_ongoing(block: Any, dnames: list, check_cond, where: str) -> tuple:
+    """The scenario's ``ongoing`` effects: a state's effect on drives per tick (open choice ``ongoing_effects``)."""
+    if not isinstance(block, list):
+        raise ScenarioError(f"{where}: ongoing must be a list of {{'when': condition, 'drives': {{drive: change}}}}")
+    out = []
+    for i, og in enumerate(block):
+        ctx = f"ongoing[{i}]"
+        if not isinstance(og, dict) or set(og) - {"name", "when", "drives", "description"} or "when" not in og \
+                or "drives" not in og:
+            raise ScenarioError(f"{where}: {ctx} must be an object with 'when' and 'drives' (and optional 'name', "
+                                "'description')")
+        check_cond(og["when"], ctx + ".when")
+        if not isinstance(og["drives"], dict) or not og["drives"]:
+            raise ScenarioError(f"{where}: {ctx}.drives must be a non-empty object of drive: change")
+        for dn, dv in og["drives"].items():
+            if dn not in dnames:
+                raise ScenarioError(f"{where}: {ctx} changes unknown drive {dn!r}")
+            if not isinstance(dv, (int, float)) or isinstance(dv, bool):
+                raise ScenarioError(f"{where}: {ctx}.drives.{dn} must be a number")
+        out.append({"name": str(og.get("name", f"ongoing{i}")), "when": dict(og["when"]), "drives": dict(og["drives"])})
+    return tuple(out)
 
 
 def _unique(names: Sequence, what: str, where: str) -> None:

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 from dataclasses import dataclass, field
 from typing import Mapping
 
@@ -158,6 +159,7 @@ class Scenario:
     observations: ObservationSpec | None = None  # None: the scenario cannot run intention recognition
     rule_policy: tuple | None = None  # of RuleSpec; None: the scenario has no rule baseline
     reference: ReferenceSpec | None = None  # None: no published numbers to compare with
+    ongoing: tuple = ()  # of {"name", "when", "drives"}: a state's drive effect per tick (open choice ongoing_effects)
 
     # -- names ---------------------------------------------------------------
     @property
@@ -179,6 +181,16 @@ class Scenario:
     def none_state(self) -> int:
         """The index of m_dom ``none`` (-1: Eq 3.3's argmax always picks a motivation)."""
         return len(self.drives) if self.open.no_activated_motivation == "none" else -1
+
+    @property
+    def activation_thresholds(self) -> list[float]:
+        """The thresholds Eq 3.2 compares with (``d < at``: not activated). Under the open choice
+        ``activation_boundary = above`` a drive exactly at its threshold is not activated either
+        (Definition 3): the next float above each threshold, so that ``d < at'`` is ``d <= at``."""
+        thr = [d.threshold for d in self.drives]
+        if self.open.activation_boundary == "above":
+            return [math.nextafter(t, math.inf) for t in thr]
+        return thr
 
     @property
     def action_names(self) -> list[str]:

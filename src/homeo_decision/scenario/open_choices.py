@@ -117,6 +117,9 @@ def _default(f):
     return f.default_factory() if callable(f.default_factory) else f.default
 
 
+LATER_CHOICES = frozenset({"activation_boundary", "ongoing_effects"})  # issue 25 (``OpenChoices.printed``)
+
+
 @dataclass(frozen=True)
 class OpenChoices:
     """The ``open`` block, validated: the thesis's open choices and the initial state."""
@@ -153,6 +156,14 @@ class OpenChoices:
                                       "ticks")
     no_activated_motivation: str = choice("argmax", OneOf("argmax", "none"), "when no motivation is activated "
                                           "(Definition 6): Eq 3.3's argmax picks one, or m_dom is 'none'")
+    activation_boundary: str = choice("eq_3_2", OneOf("eq_3_2", "above"), "a drive exactly at its threshold: "
+                                      "Eq 3.2 activates its motivation ('0 if d_i < at_i'); 'above': not "
+                                      "activated, as Definition 3 reads ('When d_i > at_i, d_i is considered "
+                                      "unsatisfied')")
+    ongoing_effects: str = choice("actions", OneOf("actions", "every_tick"), "the scenario's ongoing block "
+                                  "(Table 4.1 'NEng -20 if charging'): only through the actions whose row "
+                                  "states it (Attach, Stay), or on every tick that starts and ends in that "
+                                  "state whatever the action (a drive the action changes is not changed twice)")
     intention_threshold: float = choice(0.0, Between(0.0, 1.0), "below this posterior the recognised "
                                         "intention is none (docs/INTENTION.md)")
     intention_prior_strength: float = choice(10.0, Between(0.0, 1e6), "textbook observations each prior CPD "
@@ -172,6 +183,12 @@ class OpenChoices:
     def as_dict(self) -> dict:
         """The block as plain data, in declaration order (results files, a checkpoint's scenario print)."""
         return {f.name: getattr(self, f.name) for f in fields(self)}
+
+    def printed(self) -> dict:
+        """``as_dict`` without the choices declared after checkpoints began to print the block, where they
+        hold their defaults: a checkpoint written before a choice existed stays valid while it is unused."""
+        return {f.name: getattr(self, f.name) for f in fields(self)
+                if not (f.name in LATER_CHOICES and getattr(self, f.name) == _default(f))}
 
 
 CHOICES = tuple(f for f in fields(OpenChoices) if "allowed" in f.metadata)  # the open choices, in order

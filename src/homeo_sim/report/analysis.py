@@ -21,8 +21,9 @@ from homeo_msgs_py.learning import DOD
 
 from ..runner import RUN_LEARNING, RunConfig
 from ..stats import describe
-from .fidelity import fidelity
-from ..sweep import LEARN_HSR, LEARN_RSR, LEARNING_WINDOW, SWEEPS, JobResult, median_time, point_config
+from .fidelity import fidelity, seed_sets
+from ..sweep import (LEARN_HSR, LEARN_RSR, LEARNING_WINDOW, SWEEPS, JobResult, median_time, point_config,
+                     summarize_point)
 
 BASELINES = ("random", "rule", "flatq", "nofeedback")  # "rule" only when the scenario has a rule_policy block
 POLICY_LABELS = {"objectq": "Object-Q (thesis)", "random": "random", "rule": "threshold rules",
@@ -134,7 +135,11 @@ def _analyse(sc, base: RunConfig, R: dict, M: dict, seeds: int) -> dict:
     d["checks"] = _checks(sc, M, pols, early, mean, base.iterations)
     # the fidelity score: Table 4.5 against our intervals, and the text's statements about the sweeps
     # against their criteria (both from the scenario's reference block; none without one)
-    d["fidelity"] = fidelity(sc.reference, M, SWEEPS, {DOD_SWEEP: base.dod})
+    # the statements on disjoint sets of SET_SIZE seeds (the runs by position in the seed list)
+    names = sc.drive_names
+    M_sets = [{k: summarize_point([v[i] for i in pos], names) for k, v in R.items()}
+              for pos in seed_sets(range(seeds))]
+    d["fidelity"] = fidelity(sc.reference, M, SWEEPS, {DOD_SWEEP: base.dod}, M_sets=M_sets, n_seeds=seeds)
     d["statements"] = d["fidelity"]["statements"]
     return d
 

@@ -1,13 +1,19 @@
 """The fidelity score: how close a run set comes to the published numbers and statements.
 
-Two parts, both from the scenario's ``reference`` block (no thesis name lives in this code):
+From the scenario's ``reference`` block (no thesis name lives in this code), two parts that do not
+reward noise (issue 25):
 
-- ``table_score``: per published number (Table 4.5), whether it lies inside our 95% interval
-  and how far our mean is from it in half-widths of that interval. The half-width used for the
-  distance is at least ``HALF_WIDTH_FLOOR`` of the published value, so that a very narrow
-  interval (e.g. HSR over 20 seeds) does not turn a small miss into a huge distance.
-- ``criteria_score``: per statement of the text about the sweeps, its criterion (data in
-  ``reference.criteria``, written from the text) and whether our numbers meet it.
+- the published numbers (Table 4.5): per number, the relative error of our mean over all the seeds
+  run, (ours - published) / published; summed up as the mean absolute error and the largest one.
+  More seeds only make our mean firmer. (``table_score`` also keeps, per number, whether it lies
+  inside our 95% interval and the distance in half-widths, the score of issue 15: with more seeds
+  the interval narrows and fewer numbers are "inside", so that count is not the score any more.)
+- the statements of the text about the sweeps (``criteria_score``: each statement's criterion, data
+  in ``reference.criteria``, written from the text): each is checked on every one of the disjoint
+  sets of ``SET_SIZE`` consecutive seeds (``seed_sets``), the size the criteria were written for;
+  per statement, the share of sets on which it holds, and per set, how many statements hold.
+
+``GOALS`` are the targets of issue 25 for both parts; ``fidelity`` says which are met.
 
 ``M`` is always ``{label: aggregate}`` with labels ``base`` (the default run) and
 ``<sweep>=<value>`` (e.g. ``xi=0.0``, ``pseudo=False``); an aggregate is the layout of
@@ -19,6 +25,11 @@ from __future__ import annotations
 from typing import Mapping, Sequence
 
 HALF_WIDTH_FLOOR = 0.05  # the distance's half-width is at least this fraction of the published value
+SET_SIZE = 20  # the statements are checked on disjoint sets of this many seeds
+# issue 25's targets: the mean absolute relative error, every number's, the headline rates' (HSR, RSR), and
+# the statements that hold on each set (a fraction of them, 0.9 = 9 of 10)
+GOALS = {"mean_error": 0.08, "each_error": 0.15, "headline_error": 0.05, "headline": ("HSR", "RSR"),
+         "statements_per_set": 0.9}
 
 
 # -- Table 4.5 ----------------------------------------------------------------------------
@@ -54,6 +65,40 @@ def table_score(agg: Mapping, metrics: Mapping, floor: float = HALF_WIDTH_FLOOR)
         rows.append({"metric": path, "thesis": ref, "mean": d["mean"], "ci95": [lo, hi],
                      "inside": bool(lo <= ref <= hi), "distance": dist})
     return rows
+
+
+def relative_errors(agg: Mapping, metrics: Mapping) -> list[dict]:
+    """Per published number: our mean and its relative error (ours - published) / published."""
+    rows = []
+    for path, ref in reference_numbers(metrics):
+        mean = value_at(agg, path)["mean"]
+        err = (mean - ref) / ref if ref else (0.0 if mean == ref else float("inf"))
+        rows.append({"metric": path, "thesis": ref, "mean": mean, "error": err})
+    return rows
+
+
+def error_summary(rows: Sequence[Mapping], goals: Mapping = GOALS) -> dict:
+    """The mean absolute relative error, the largest (and which), the headline rates' errors, the goals met."""
+    if not rows:
+        return {}
+    errs = {r["metric"]: r["error"] for r in rows}
+    worst = max(errs, key=lambda k: abs(errs[k]))
+    mae = sum(abs(e) for e in errs.values()) / len(errs)
+    head = {k: errs[k] for k in goals["headline"] if k in errs}
+    return {"mean_abs_error": mae, "largest": worst, "largest_error": errs[worst], "headline_errors": head,
+            "within_each": sum(abs(e) <= goals["each_error"] for e in errs.values()), "of": len(errs),
+            "goals": {"mean_error": mae <= goals["mean_error"],
+                      "each_error": all(abs(e) <= goals["each_error"] for e in errs.values()),
+                      "headline_error": all(abs(e) <= goals["headline_error"] for e in head.values())}}
+
+
+def seed_sets(seeds: Sequence[int], size: int = SET_SIZE) -> list[list[int]]:
+    """Disjoint sets of ``size`` consecutive seeds (seeds past the last full set are in none); fewer
+    seeds than ``size``: one set of all of them."""
+    seeds = list(seeds)
+    if len(seeds) < size:
+        return [seeds] if seeds else []
+    return [seeds[i:i + size] for i in range(0, len(seeds) - size + 1, size)]
 
 
 # -- statements about the sweeps -----------------------------------------------------------
@@ -149,18 +194,57 @@ def needed_labels(criteria: Sequence[Mapping], sweeps: Mapping) -> set[str]:
     return out
 
 
+def statement_shares(criteria: Sequence[Mapping], M_sets: Sequence[Mapping], sweeps: Mapping,
+                     base_value: Mapping | None = None) -> dict:
+    """Each criterion on every seed set: per set the statements met, per statement the sets it holds on."""
+    per_set = [criteria_score(criteria, M, sweeps, base_value) for M in M_sets]
+    shares = []
+    for i, c in enumerate(criteria):
+        held = [rows[i]["agrees"] for rows in per_set]
+        shares.append({"id": c["id"], "held": sum(held), "of": len(held), "per_set": held,
+                       "share": sum(held) / len(held) if held else 0.0})
+    return {"met_per_set": [sum(r["agrees"] for r in rows) for rows in per_set], "shares": shares}
+
+
 # -- the whole score -----------------------------------------------------------------------
 
-def fidelity(reference, M: Mapping, sweeps: Mapping, base_value: Mapping | None = None) -> dict:
-    """Table score, criteria score and a one-line summary (``reference``: a ``ReferenceSpec`` or None)."""
+def fidelity(reference, M: Mapping, sweeps: Mapping, base_value: Mapping | None = None,
+             M_sets: Sequence[Mapping] | None = None, n_seeds: int | None = None, set_size: int = SET_SIZE,
+             goals: Mapping = GOALS) -> dict:
+    """The score and a one-line summary (``reference``: a ``ReferenceSpec`` or None). ``M`` aggregates
+    all ``n_seeds`` seeds (the published numbers); ``M_sets`` the same runs per seed set (``seed_sets``;
+    default: ``M`` alone, one set) for the statements."""
     if reference is None:
         return {"table": [], "statements": [], "summary": "no reference block: no fidelity score"}
     table = table_score(M["base"], reference.metrics)
+    for row, e in zip(table, relative_errors(M["base"], reference.metrics)):
+        row["error"] = e["error"]
+    errors = error_summary(table, goals)
     crit = criteria_score(reference.criteria or (), M, sweeps, base_value)
+    sets = statement_shares(reference.criteria or (), M_sets if M_sets is not None else [M], sweeps, base_value)
+    for row, share in zip(crit, sets["shares"]):
+        row.update(held=share["held"], of=share["of"], per_set=share["per_set"])
     inside = sum(r["inside"] for r in table)
     met = sum(s["agrees"] for s in crit)
-    return {"table": table, "table_inside": inside, "table_total": len(table),
-            "table_mean_distance": sum(r["distance"] for r in table) / len(table) if table else 0.0,
-            "statements": crit, "statements_met": met, "statements_total": len(crit),
-            "half_width_floor": HALF_WIDTH_FLOOR,
-            "summary": f"Table 4.5: {inside}/{len(table)} inside CI; statements: {met}/{len(crit)}"}
+    per_set, n_st = sets["met_per_set"], len(crit)
+    out = {"table": table, "table_inside": inside, "table_total": len(table),
+           "table_mean_distance": sum(r["distance"] for r in table) / len(table) if table else 0.0,
+           "statements": crit, "statements_met": met, "statements_total": len(crit),
+           "half_width_floor": HALF_WIDTH_FLOOR, "errors": errors, "seeds": n_seeds, "set_size": set_size,
+           "statements_per_set": per_set}
+    parts = []
+    if errors:
+        head = ", ".join(f"{k} {100 * v:+.1f}%" for k, v in errors["headline_errors"].items())
+        parts.append(f"Table 4.5{f' over {n_seeds} seeds' if n_seeds else ''}: mean |error| "
+                     f"{100 * errors['mean_abs_error']:.1f}%, largest {errors['largest'].replace('.', ' ')} "
+                     f"{100 * errors['largest_error']:+.0f}%, {errors['within_each']}/{errors['of']} within "
+                     f"{100 * goals['each_error']:g}%" + (f", {head}" if head else ""))
+    if n_st:
+        size = len((M_sets or [M])[0]["base"]["HSR"]["per_seed"])
+        parts.append(f"statements per {size}-seed set: {', '.join(map(str, per_set))} of {n_st}")
+        out["goals"] = dict(errors.get("goals", {}),
+                            statements_per_set=bool(per_set) and min(per_set) >= goals["statements_per_set"] * n_st)
+    else:
+        out["goals"] = dict(errors.get("goals", {}))
+    out["summary"] = "; ".join(parts) if parts else "no published numbers or statements"
+    return out

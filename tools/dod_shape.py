@@ -1,0 +1,88 @@
+"""The shape of RSR over the Degree of Dedication (Fig 4.5; issue 25, docs/FIDELITY.md "The DoD line").
+
+    .venv/bin/python tools/dod_shape.py --seeds 5000-5099 [--change KEY=JSON[,KEY=JSON] ...]
+
+For the current default (and each change of it): mean RSR and HSR at every DoD of the sweep over all the
+seeds, then per disjoint set of 20 seeds the criterion of "RSR is almost negatively linearly related to
+[DoD]" (RSR(0.5) against the straight line from RSR(0) to RSR(1), tolerance 0.1) and where the curve
+leaves that line the most over the whole grid.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+TOOLS = Path(__file__).resolve().parent
+sys.path.insert(0, str(TOOLS))
+sys.path.insert(0, str(TOOLS.parent / "src"))
+
+import error_search as es  # noqa: E402
+from homeo_msgs_py.cli_args import Parser, int_at_least, run_command  # noqa: E402
+from homeo_sim.report.fidelity import seed_sets  # noqa: E402
+from homeo_sim.runner import run_seeds  # noqa: E402
+from homeo_sim.sweep import SWEEPS  # noqa: E402
+
+PROG = "dod_shape.py"
+LINEAR_TOL = 0.1  # the criterion dod_linear_rsr of the thesis scenario (reference.criteria)
+
+
+def curve(o: dict, seeds: list[int], workers: int = 1) -> dict:
+    """RSR and HSR per seed at every DoD of the sweep: ``{dod: {"RSR": [...], "HSR": [...]}}``."""
+    cfgs = es.j._configs(o, SWEEPS["dod"])
+    out = {}
+    for d in SWEEPS["dod"]:
+        ms = [r.metrics for r in run_seeds(cfgs[f"dod={d}"], seeds, workers)]
+        out[d] = {"RSR": [m["RSR"] for m in ms], "HSR": [m["HSR"] for m in ms]}
+    return out
+
+
+def shape(c: dict, idx: list[int]) -> dict:
+    """Over the seeds at positions ``idx``: mean RSR per DoD, RSR(0.5) minus the line from RSR(0) to RSR(1),
+    and the largest departure from that line over the grid (with its DoD)."""
+    rsr = {d: sum(v["RSR"][i] for i in idx) / len(idx) for d, v in c.items()}
+    lo, hi = rsr[0.0], rsr[1.0]
+    dev = {d: r - (lo + (hi - lo) * d) for d, r in rsr.items()}
+    far = max(dev, key=lambda d: abs(dev[d]))
+    return {"rsr": rsr, "at_half": dev[0.5], "largest": (far, dev[far])}
+
+
+def report(label: str, c: dict, seeds: list[int]) -> list[str]:
+    everything = shape(c, list(range(len(seeds))))
+    hsr = {d: sum(v["HSR"]) / len(v["HSR"]) for d, v in c.items()}
+    sets = [shape(c, [seeds.index(s) for s in st]) for st in seed_sets(seeds)]
+    held = sum(abs(s["at_half"]) <= LINEAR_TOL for s in sets)
+    far, dev = everything["largest"]
+    per_set = ", ".join(f"{s['at_half']:+.2f}" for s in sets)
+    return [f"| {label} | RSR | " + " | ".join(f"{everything['rsr'][d]:.2f}" for d in SWEEPS["dod"])
+            + f" | {everything['at_half']:+.3f} ({per_set}; holds on {held}/{len(sets)}) | {dev:+.2f} at {far:g} |",
+            f"| | HSR | " + " | ".join(f"{hsr[d]:.2f}" for d in SWEEPS["dod"]) + " | | |"]
+
+
+def build_parser() -> Parser:
+    ap = Parser(prog=PROG, description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", default="5000-5099", help="seeds A-B (default 5000-5099)")
+    ap.add_argument("--change", action="append", default=[], metavar="KEY=JSON[,KEY=JSON]",
+                    help="also the current default with these changes (repeat for several points)")
+    ap.add_argument("--workers", type=int_at_least(1), default=1)
+    return ap
+
+
+def main(argv=None) -> int:
+    def command() -> int:
+        a = build_parser().parse_args(argv)
+        seeds = es.seeds_arg(a.seeds)
+        start = es.current_open()
+        points = [("current default", start)] + [(ch, {**start, **es.change_arg(ch, start)}) for ch in a.change]
+        print("| point | | " + " | ".join(f"DoD {d:g}" for d in SWEEPS["dod"])
+              + " | RSR(0.5) - line (per set of 20) | largest departure |")
+        print("|---|---|" + "---|" * (len(SWEEPS["dod"]) + 2))
+        for label, o in points:
+            print("\n".join(report(label, curve(o, seeds, a.workers), seeds)), flush=True)
+        return 0
+
+    return run_command(PROG, command, (), os_errors=True)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
