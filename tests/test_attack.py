@@ -45,7 +45,8 @@ def _forged(tick: int) -> dict[str, str]:
     env = {"version": 1, "run": 0, "tick": tick, "stamp": time.time()}
     drives = {"NAch": 0.0, "NSoc": 0.0, "NRes": 0.0, "NEng": 0.0}
     return {
-        "action": json.dumps({"schema": "homeo/action", **env, "action": "MoveToR", "drives": drives}),
+        "action": json.dumps({"schema": "homeo/action", **env, "action": "MoveToR", "drives": drives,
+                              "after_action": drives}),  # the thesis block samples the metrics after the action
         "drives": json.dumps({"schema": "homeo/drives", **env, "drives": drives,
                               "stimuli": {"Serving": 0, "Social": 0, "Relaxative": 0, "Survival": 0},
                               "intensities": {"Serving": 0, "Social": 0, "Relaxative": 0, "Survival": 99},

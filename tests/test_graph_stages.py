@@ -84,7 +84,8 @@ def test_the_driver_counts_a_tick_the_world_could_not_act_on_as_missed(thesis):
         obs = [m for key, m in bus.drain() if key == "world"]
         assert obs and obs[-1].tick == k
         from homeo_msgs_py.schemas import Message
-        driver.on_action(Message("homeo/action", 0, k, 1.0, {"action": "Chat", "drives": {n: 0.0 for n in thesis.drive_names}}))
+        zeros = {n: 0.0 for n in thesis.drive_names}
+        driver.on_action(Message("homeo/action", 0, k, 1.0, {"action": "Chat", "drives": zeros, "after_action": zeros}))
     assert driver.tick == 2 and driver.missed == 1 and noted == ["missed ticks"]
 
 

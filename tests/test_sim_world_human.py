@@ -66,11 +66,11 @@ def test_satisfied_gives_praise(always, enc):
     assert (r.feedback, r.proposal, r.satisfied) == (1, None, True)
 
 
-def test_unsatisfied_gives_scolding_and_proposal(always, enc):
-    code = enc(always, "H")
-    h = draw_intention(always, code, "light")
-    r = h.respond(always.action_index("Chat"))
-    assert (r.feedback, r.proposal, r.satisfied) == (-1, always.action_index("LightOn"), False)
+def test_unsatisfied_gives_scolding_and_proposal(enc):
+    sc = load_scenario(overrides={"human_no_intention_prob": 0.0, "human_proposal_prob": 1.0})  # Algorithm 2
+    h = draw_intention(sc, enc(sc, "H"), "light")
+    r = h.respond(sc.action_index("Chat"))
+    assert (r.feedback, r.proposal, r.satisfied) == (-1, sc.action_index("LightOn"), False)
 
 
 @pytest.mark.parametrize("rule", ["MoveToR", "MoveToC"])
@@ -341,10 +341,11 @@ def test_metrics_sample_open_choice(tmp_path):
     # 0..N-1 as the decision-time drives of lines 1..N. In the first 20 iterations NSoc, NRes and
     # NEng stay far below 100, so "after_action" = "end" - rate (Table 4.2: 3, 2, 2) exactly.
     path = tmp_path / "t.jsonl"
-    run_episode(RunConfig(iterations=21, seed=2, trace=str(path)))
+    at_end = (("metrics_sample", "end"),)
+    run_episode(RunConfig(iterations=21, seed=2, trace=str(path), overrides=at_end))
     lines = [json.loads(x) for x in path.read_text().splitlines()]
     ends = [line["drives"] for line in lines[1:21]]
-    end = run_episode(RunConfig(iterations=20, seed=2)).metrics["CDA"]
+    end = run_episode(RunConfig(iterations=20, seed=2, overrides=at_end)).metrics["CDA"]
     mid = run_episode(RunConfig(iterations=20, seed=2, overrides=(("metrics_sample", "after_action"),))).metrics["CDA"]
     for name, rate in (("NSoc", 3), ("NRes", 2), ("NEng", 2)):
         mean_end = sum(d[name] for d in ends) / 20

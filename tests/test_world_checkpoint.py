@@ -38,6 +38,7 @@ class ScriptedRobot:
         names = sc.drive_names
         f = {"action": sc.action_names[(tick * 7) % len(sc.action_names)], "m_dom": sc.motivation_names[0],
              "tau": 1.0, "drives": {n: float((tick * 13 + 17 * i) % 101) for i, n in enumerate(names)},
+             "after_action": {n: float((tick * 11 + 5 * i) % 101) for i, n in enumerate(names)},  # metrics_sample
              "intention": sc.intention_names[tick % len(sc.intention_names)],
              "params": {"dod": 0.5, "xi": 1.0, "gamma": 0.9, "feedback": True, "pseudo_update": True}}
         if drv.state == "finishing":

@@ -161,9 +161,9 @@ class OpenChoices:
                                       "activated, as Definition 3 reads ('When d_i > at_i, d_i is considered "
                                       "unsatisfied')")
     ongoing_effects: str = choice("actions", OneOf("actions", "every_tick"), "the scenario's ongoing block "
-                                  "(Table 4.1 'NEng -20 if charging'): only through the actions whose row "
-                                  "states it (Attach, Stay), or on every tick that starts and ends in that "
-                                  "state whatever the action (a drive the action changes is not changed twice)")
+                                  "(Table 4.1's charging): only through the actions whose own effects say so, "
+                                  "or on every tick that starts and ends in that state whatever the action "
+                                  "(a drive the action changes is not changed twice)")
     intention_threshold: float = choice(0.0, Between(0.0, 1.0), "below this posterior the recognised "
                                         "intention is none (docs/INTENTION.md)")
     intention_prior_strength: float = choice(10.0, Between(0.0, 1e6), "textbook observations each prior CPD "
