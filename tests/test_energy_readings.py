@@ -72,19 +72,6 @@ def test_activation_boundary_at_the_threshold():
         assert motivational_state([0.5, 70.5, 49.0, 50.5], sc.activation_thresholds, stim)[0] == [20.5, 70.5, 0.0, 60.5]
 
 
-@pytest.mark.parametrize("override, words", [
-    ({"ongoing_effects": "always"}, ("ongoing_effects", "actions", "every_tick")),
-    ({"ongoing_effects": True}, ("ongoing_effects",)),
-    ({"activation_boundary": "below"}, ("activation_boundary", "eq_3_2", "above")),
-])
-def test_bad_issue_25_open_choice_is_one_line_error(override, words):
-    with pytest.raises(ScenarioError) as e:
-        load_scenario(overrides=override)
-    assert "\n" not in str(e.value)
-    for w in words:
-        assert w in str(e.value)
-
-
 @pytest.mark.parametrize("change, words", [
     (lambda r: r.__setitem__("ongoing", {}), ("ongoing must be a list",)),
     (lambda r: r["ongoing"][0].pop("drives"), ("ongoing[0]", "'when' and 'drives'")),

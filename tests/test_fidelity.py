@@ -220,6 +220,9 @@ def test_no_effect_makes_every_action_selectable_and_an_invalid_one_idle(enc):
     ({"drive_growth": {"Mood": "always"}}, ("drive_growth", "NSoc, NRes, NEng")),
     ({"drive_growth": ["NSoc"]}, ("drive_growth", "must map")),
     ({"no_activated_motivation": "nobody"}, ("no_activated_motivation", "argmax", "none")),
+    ({"ongoing_effects": "always"}, ("ongoing_effects", "actions", "every_tick")),  # issue 25's readings
+    ({"ongoing_effects": True}, ("ongoing_effects",)),
+    ({"activation_boundary": "below"}, ("activation_boundary", "eq_3_2", "above")),
 ])
 def test_bad_new_open_choice_is_one_line_error(override, words):
     with pytest.raises(ScenarioError) as e:

@@ -45,8 +45,14 @@ PROG = "error_search.py"
 SC, DRIVES = j.SC, j.DRIVES
 # issue 15's searched choices and issue 25's readings of the energy drive and of the activation boundary
 SEARCHED = j.SEARCHED + ("ongoing_effects", "activation_boundary")
-GROWTH_SEARCH = {"NSoc": ["always", "human_not_near", "not_lowered"], "NRes": ["always", "robot_moved", "not_lowered"],
-                 "NEng": ["always", "not_lowered"]}
+# issue 15's space, widened where its best points sat at an end (a busier human, a higher initial Q value,
+# more absences), NEng's growth and issue 25's readings added; neighbours move the initial Q value and how
+# busy the human is by more than one grid step
+SPACE = j.Space(searched=SEARCHED, initial_q=(-5.0, 25.0), no_intention=(0.05, 0.8),
+                leave_probs=(0.0, 0.02, 0.05, 0.1, 0.2),
+                growth={**j.GROWTH_SEARCH, "NEng": ["always", "not_lowered"]},
+                extra={"ongoing_effects": ("actions", "every_tick"), "activation_boundary": ("eq_3_2", "above")},
+                steps={"initial_q": (1, 2, 4), "human_no_intention_prob": (1, 2)})
 DOD_SEARCH = j.DOD_SEARCH
 W_EACH, W_HEAD, W_MET, W_SHORT, W_TEXT = 2.0, 4.0, 3.0, 3.0, 1.0
 GATE = 0.20  # a mean absolute error above this: the statements are not run
@@ -64,41 +70,13 @@ def current_open() -> dict:
 
 
 def suggest(trial, start: dict) -> dict:
-    """One point of the joint space: every searched open choice at once (issue 15's ranges, widened where
-    its best points sat at an end: a busier human, a higher initial Q value, more absences)."""
-    o = dict(start)
-    o["initial_q"] = trial.suggest_float("initial_q", -5.0, 25.0, step=0.5)
-    o["scold_drive_change"] = trial.suggest_float("scold_drive_change", 0.0, 10.0, step=1.0)
-    o["serving_growth"] = trial.suggest_categorical("serving_growth", ["always", "expressed", "unsatisfied"])
-    o["reward_span"] = trial.suggest_categorical("reward_span", ["iteration", "action"])
-    o["on_leave_effects"] = trial.suggest_categorical("on_leave_effects", [True, False])
-    o["tie_break"] = trial.suggest_categorical("tie_break", ["first", "last"])
-    o["value_max_over"] = trial.suggest_categorical("value_max_over", ["all", "valid"])
-    o["metrics_sample"] = trial.suggest_categorical("metrics_sample", ["end", "after_action"])
-    o["human_no_intention_prob"] = trial.suggest_float("human_no_intention_prob", 0.05, 0.8, step=0.05)
-    o["human_leave_prob"] = trial.suggest_categorical("human_leave_prob", [0.0, 0.02, 0.05, 0.1, 0.2])
-    o["human_return_prob"] = trial.suggest_float("human_return_prob", 0.2, 1.0, step=0.1)
-    o["human_proposal_choice"] = trial.suggest_categorical("human_proposal_choice", ["random", "MoveToR", "MoveToC"])
-    o["human_proposal_prob"] = trial.suggest_float("human_proposal_prob", 0.5, 1.0, step=0.1)
-    o["invalid_actions"] = trial.suggest_categorical("invalid_actions", ["excluded", "no_effect"])
-    free = trial.suggest_categorical("always_valid_actions", ["none", "Rest", "Chat", "Rest+Chat"])
-    o["always_valid_actions"] = [] if free == "none" else free.split("+")
-    o["time_increase"] = trial.suggest_categorical("time_increase", ["after_action", "before_action"])
-    g = {d: trial.suggest_categorical(f"growth_{d}", readings) for d, readings in GROWTH_SEARCH.items()}
-    o["drive_growth"] = {d: r for d, r in g.items() if r != "always"}
-    o["no_activated_motivation"] = trial.suggest_categorical("no_activated_motivation", ["argmax", "none"])
-    o["ongoing_effects"] = trial.suggest_categorical("ongoing_effects", ["actions", "every_tick"])
-    o["activation_boundary"] = trial.suggest_categorical("activation_boundary", ["eq_3_2", "above"])
-    return o
+    """One point of the joint space: every searched open choice at once (``SPACE``)."""
+    return j.suggest(trial, start, SPACE)
 
 
 def params(o: dict) -> dict:
     """An open block as the parameters of ``suggest`` (to enqueue a known point)."""
-    p = {k: o[k] for k in SEARCHED if k not in ("always_valid_actions", "drive_growth")}
-    p["always_valid_actions"] = "+".join(o["always_valid_actions"]) or "none"
-    for d in GROWTH_SEARCH:
-        p[f"growth_{d}"] = o.get("drive_growth", {}).get(d, "always")
-    return p
+    return j._params(o, SPACE)
 
 
 # -- one evaluation ---------------------------------------------------------------------------------
@@ -220,46 +198,9 @@ def search(trials: int, table_seeds: list[int], statement_seeds: list[int], out:
 
 # -- refinement: a greedy walk from the best point ------------------------------------------------------
 
-# grid steps a neighbour moves by (multiples of the suggest() grid): the initial Q value and how busy the human
-# is were the strongest levers of issue 15 and of issue 25's first measurements
-WIDE_STEPS = {"initial_q": (1, 2, 4), "human_no_intention_prob": (1, 2)}
-
-
-def _space(optuna) -> dict:
-    """The distributions of ``suggest``'s parameters."""
-    class Probe:
-        def __init__(self):
-            self.d = {}
-
-        def suggest_float(self, name, low, high, step=None):
-            self.d[name] = optuna.distributions.FloatDistribution(low, high, step=step)
-            return low
-
-        def suggest_categorical(self, name, choices):
-            self.d[name] = optuna.distributions.CategoricalDistribution(choices)
-            return choices[0]
-
-    p = Probe()
-    suggest(p, current_open())
-    return p.d
-
-
 def neighbours(o: dict) -> list[dict]:
-    """Each searched choice moved alone: a float by the steps of ``WIDE_STEPS`` (one grid step by default)
-    either way, a categorical to each other value; absence settings only while the human can leave."""
-    import optuna
-
-    space, here, out = _space(optuna), params(o), []
-    for name, dist in space.items():
-        if name in ("human_return_prob", "on_leave_effects") and not o["human_leave_prob"]:
-            continue
-        if isinstance(dist, optuna.distributions.FloatDistribution):
-            values = [round(here[name] + sign * k * dist.step, 6) for k in WIDE_STEPS.get(name, (1,)) for sign in (-1, 1)]
-            values = [v for v in values if dist.low <= v <= dist.high]
-        else:
-            values = [c for c in dist.choices if c != here[name]]
-        out += [suggest(optuna.trial.FixedTrial({**here, name: v}), o) for v in values]
-    return out
+    """Each searched choice moved alone (``joint_search.neighbours`` in ``SPACE``)."""
+    return j.neighbours(o, SPACE)
 
 
 def refine(start: dict, table_seeds: list[int], statement_seeds: list[int], out: Path, rounds: int, top: int,

@@ -23,8 +23,9 @@ import math
 import re
 import sys
 import time
-from dataclasses import replace
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Mapping
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
@@ -44,6 +45,23 @@ SEARCHED = ("initial_q", "scold_drive_change", "serving_growth", "reward_span", 
             "time_increase", "drive_growth", "no_activated_motivation")
 # drive_growth is searched per drive: NSoc and NRes (Sec 3.3.1 gives each a growth condition); NEng always grows
 GROWTH_SEARCH = {"NSoc": ["always", "human_not_near", "not_lowered"], "NRes": ["always", "robot_moved", "not_lowered"]}
+
+
+@dataclass(frozen=True)
+class Space:
+    """What ``suggest`` searches: issue 15's space by default; tools/error_search.py (issue 25) widens the
+    ranges where issue 15's best points sat at an end and adds its readings (``extra``)."""
+
+    searched: tuple = SEARCHED
+    initial_q: tuple = (-5.0, 20.0)
+    no_intention: tuple = (0.3, 0.8)
+    leave_probs: tuple = (0.0, 0.02, 0.05, 0.1)
+    growth: Mapping = field(default_factory=lambda: dict(GROWTH_SEARCH))
+    extra: Mapping = field(default_factory=dict)  # {choice: its values}, categoricals beyond issue 15's
+    steps: Mapping = field(default_factory=lambda: {"initial_q": (1, 2)})  # neighbours: grid steps a float moves
+
+
+ISSUE_15 = Space()
 DOD_SEARCH = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 1.0)
 # the objective's weights (docs/FIDELITY.md): a statement met or a number inside counts 1
 W_TREND, W_DIST, W_TEXT = 0.25, 0.02, 0.5
@@ -153,10 +171,10 @@ def score(e: dict) -> float:
 
 # -- the search ------------------------------------------------------------------------------
 
-def suggest(trial, start: dict) -> dict:
+def suggest(trial, start: dict, space: Space = ISSUE_15) -> dict:
     """One point of the joint space (every searched open choice at once)."""
     o = dict(start)
-    o["initial_q"] = trial.suggest_float("initial_q", -5.0, 20.0, step=0.5)
+    o["initial_q"] = trial.suggest_float("initial_q", *space.initial_q, step=0.5)
     o["scold_drive_change"] = trial.suggest_float("scold_drive_change", 0.0, 10.0, step=1.0)
     o["serving_growth"] = trial.suggest_categorical("serving_growth", ["always", "expressed", "unsatisfied"])
     o["reward_span"] = trial.suggest_categorical("reward_span", ["iteration", "action"])
@@ -164,8 +182,8 @@ def suggest(trial, start: dict) -> dict:
     o["tie_break"] = trial.suggest_categorical("tie_break", ["first", "last"])
     o["value_max_over"] = trial.suggest_categorical("value_max_over", ["all", "valid"])
     o["metrics_sample"] = trial.suggest_categorical("metrics_sample", ["end", "after_action"])
-    o["human_no_intention_prob"] = trial.suggest_float("human_no_intention_prob", 0.3, 0.8, step=0.05)
-    o["human_leave_prob"] = trial.suggest_categorical("human_leave_prob", [0.0, 0.02, 0.05, 0.1])
+    o["human_no_intention_prob"] = trial.suggest_float("human_no_intention_prob", *space.no_intention, step=0.05)
+    o["human_leave_prob"] = trial.suggest_categorical("human_leave_prob", list(space.leave_probs))
     o["human_return_prob"] = trial.suggest_float("human_return_prob", 0.2, 1.0, step=0.1)
     o["human_proposal_choice"] = trial.suggest_categorical("human_proposal_choice", ["random", "MoveToR", "MoveToC"])
     o["human_proposal_prob"] = trial.suggest_float("human_proposal_prob", 0.5, 1.0, step=0.1)
@@ -173,17 +191,19 @@ def suggest(trial, start: dict) -> dict:
     free = trial.suggest_categorical("always_valid_actions", ["none", "Rest", "Chat", "Rest+Chat"])
     o["always_valid_actions"] = [] if free == "none" else free.split("+")
     o["time_increase"] = trial.suggest_categorical("time_increase", ["after_action", "before_action"])
-    g = {d: trial.suggest_categorical(f"growth_{d}", readings) for d, readings in GROWTH_SEARCH.items()}
+    g = {d: trial.suggest_categorical(f"growth_{d}", readings) for d, readings in space.growth.items()}
     o["drive_growth"] = {d: r for d, r in g.items() if r != "always"}
     o["no_activated_motivation"] = trial.suggest_categorical("no_activated_motivation", ["argmax", "none"])
+    for name, values in space.extra.items():
+        o[name] = trial.suggest_categorical(name, list(values))
     return o
 
 
-def _params(o: dict) -> dict:
+def _params(o: dict, space: Space = ISSUE_15) -> dict:
     """An open block as Optuna parameters (to enqueue a known point)."""
-    p = {k: o[k] for k in SEARCHED if k not in ("always_valid_actions", "drive_growth")}
+    p = {k: o[k] for k in space.searched if k not in ("always_valid_actions", "drive_growth")}
     p["always_valid_actions"] = "+".join(o["always_valid_actions"]) or "none"
-    for d in GROWTH_SEARCH:
+    for d in space.growth:
         p[f"growth_{d}"] = o.get("drive_growth", {}).get(d, "always")
     return p
 
@@ -227,7 +247,7 @@ def diff(o: dict, ref: dict) -> str:
     return ", ".join(ch) or "(as the current default)"
 
 
-def _space(optuna) -> dict:
+def _space(optuna, space: Space = ISSUE_15) -> dict:
     """The search space's distributions (for trials added from an earlier search)."""
     class _Probe:  # records the distributions suggest() asks for
         def __init__(self):
@@ -245,7 +265,7 @@ def _space(optuna) -> dict:
             return self._rec(name, optuna.distributions.CategoricalDistribution(choices))
 
     probe = _Probe()
-    suggest(probe, current_open())
+    suggest(probe, current_open(space.searched), space)
     return probe.distributions
 
 
@@ -446,28 +466,23 @@ def print_result(res: dict) -> None:
 # -- refinement around the adopted block (issue 15, third part) ----------------------------------
 
 # an initial Q value two grid steps away as well: the issue's main lever (how long the robot explores)
-WIDE_STEPS = {"initial_q": 2}
-
-
-def neighbours(o: dict) -> list[dict]:
-    """The one-step neighbourhood of an open block in the searched space: each float one grid step
-    either way (initial_q also two), each categorical set to each of its other values. Moves that
-    cannot change a run are left out (``human_return_prob`` and ``on_leave_effects`` while the human
+def neighbours(o: dict, space: Space = ISSUE_15) -> list[dict]:
+    """The one-step neighbourhood of an open block in the searched space: each float by the grid steps of
+    ``space.steps`` (one by default) either way, each categorical set to each of its other values. Moves
+    that cannot change a run are left out (``human_return_prob`` and ``on_leave_effects`` while the human
     never leaves)."""
     import optuna
 
-    space, here, out = _space(optuna), _params(o), []
-    for name, dist in space.items():
+    dists, here, out = _space(optuna, space), _params(o, space), []
+    for name, dist in dists.items():
         if name in ("human_return_prob", "on_leave_effects") and not o["human_leave_prob"]:
             continue
         if isinstance(dist, optuna.distributions.FloatDistribution):
-            steps = range(1, WIDE_STEPS.get(name, 1) + 1)
-            values = [round(here[name] + s * k * dist.step, 6) for k in steps for s in (-1, 1)]
+            values = [round(here[name] + sign * k * dist.step, 6) for k in space.steps.get(name, (1,)) for sign in (-1, 1)]
             values = [v for v in values if dist.low <= v <= dist.high]
         else:
             values = [c for c in dist.choices if c != here[name]]
-        for v in values:
-            out.append(suggest(optuna.trial.FixedTrial({**here, name: v}), o))
+        out += [suggest(optuna.trial.FixedTrial({**here, name: v}), o, space) for v in values]
     return out
 
 
