@@ -180,15 +180,14 @@ def cmd_pub(args) -> int:
     from homeo_msgs_py.qos import pub_qos
 
     key = _key(args.topic)
+    name = TOPICS[key].name
     ros = _Ros()
     try:
-        pub = ros.node.create_publisher(String, TOPICS[key].name, pub_qos(key))
+        pub = ros.node.create_publisher(String, name, pub_qos(key))
         # every reader the graph knows of, matched: publishing when the first matched (``ros2 topic
         # pub --once``) loses the message for a reader that matches later (a volatile topic), and a
         # person's wish has two (the world node and the recorder of --record); a short settle lets a
         # reader discovered a moment later count too
-        name = TOPICS[key].name
-
         def all_matched() -> bool:
             n = pub.get_subscription_count()
             return n > 0 and n >= ros.node.count_subscribers(name)

@@ -116,6 +116,7 @@ def _compile(sc: Scenario) -> None:
         ok = tuple(range(len(sc.actions))) if all_of_a else tuple(i for i, a in enumerate(sc.actions) if allowed[i])
         valid.append(ok)
         valid_local.append(tuple(tuple(act_local[a] for a in ok if act_obj[a] == k) for k in range(len(obj_names))))
+        ongoing_here = [og for og in ongoing if _holds(og["when"], view)]  # it must hold before and after
         nxt, dd = [], []
         for ai, a in enumerate(sc.actions):
             new = list(idx)
@@ -138,8 +139,8 @@ def _compile(sc: Scenario) -> None:
                 new[rel_k] = located[new[loc_k]]
             nc = encode(new)
             own = tuple(delta)  # the action's own effects: an ongoing effect does not add to a drive they change
-            for og in ongoing:
-                if _holds(og["when"], view) and _holds(og["when"], views[nc]):
+            for og in ongoing_here:
+                if _holds(og["when"], views[nc]):
                     for dn, dv in og["drives"].items():
                         k = dnames.index(dn)
                         if own[k] == 0.0:

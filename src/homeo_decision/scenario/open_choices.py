@@ -98,9 +98,10 @@ class DriveReadings:
         return "{drive: " + " \\| ".join(GROWTH_READINGS) + "}"
 
 
-def choice(default, allowed, doc: str):
-    """A field of ``OpenChoices``: an open choice with its default, the values it may take and its doc."""
-    meta = {"allowed": allowed, "doc": doc}
+def choice(default, allowed, doc: str, late: bool = False):
+    """A field of ``OpenChoices``: an open choice with its default, the values it may take and its doc.
+    ``late``: declared after world checkpoints began to print the block (``OpenChoices.printed``)."""
+    meta = {"allowed": allowed, "doc": doc, "late": late}
     if isinstance(default, dict):  # a mutable default: each instance its own
         return field(default_factory=lambda: dict(default), metadata=meta)
     return field(default=default, metadata=meta)
@@ -115,9 +116,6 @@ def initial(default, doc: str):
 
 def _default(f):
     return f.default_factory() if callable(f.default_factory) else f.default
-
-
-LATER_CHOICES = frozenset({"activation_boundary", "ongoing_effects"})  # issue 25 (``OpenChoices.printed``)
 
 
 @dataclass(frozen=True)
@@ -159,11 +157,11 @@ class OpenChoices:
     activation_boundary: str = choice("eq_3_2", OneOf("eq_3_2", "above"), "a drive exactly at its threshold: "
                                       "Eq 3.2 activates its motivation ('0 if d_i < at_i'); 'above': not "
                                       "activated, as Definition 3 reads ('When d_i > at_i, d_i is considered "
-                                      "unsatisfied')")
+                                      "unsatisfied')", late=True)
     ongoing_effects: str = choice("actions", OneOf("actions", "every_tick"), "the scenario's ongoing block "
                                   "(Table 4.1's charging): only through the actions whose own effects say so, "
                                   "or on every tick that starts and ends in that state whatever the action "
-                                  "(a drive the action changes is not changed twice)")
+                                  "(a drive the action changes is not changed twice)", late=True)
     intention_threshold: float = choice(0.0, Between(0.0, 1.0), "below this posterior the recognised "
                                         "intention is none (docs/INTENTION.md)")
     intention_prior_strength: float = choice(10.0, Between(0.0, 1e6), "textbook observations each prior CPD "
@@ -188,7 +186,7 @@ class OpenChoices:
         """``as_dict`` without the choices declared after checkpoints began to print the block, where they
         hold their defaults: a checkpoint written before a choice existed stays valid while it is unused."""
         return {f.name: getattr(self, f.name) for f in fields(self)
-                if not (f.name in LATER_CHOICES and getattr(self, f.name) == _default(f))}
+                if not (f.metadata.get("late") and getattr(self, f.name) == _default(f))}
 
 
 CHOICES = tuple(f for f in fields(OpenChoices) if "allowed" in f.metadata)  # the open choices, in order
