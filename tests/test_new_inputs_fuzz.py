@@ -520,3 +520,67 @@ def test_the_bench_flags_parse_or_are_one_line_errors_exit_2(flag, rest, capsys)
         assert err.count("\n") == 1 and "Traceback" not in err
         return
     assert getattr(a, flag[2:].replace("-", "_")) is True
+
+
+# -- a parameters file (params_file:=, --params-file): rcl's parse, or one line ---------------------------
+PARAM_VALUES = st.one_of(st.booleans(), st.integers(-2**40, 2**40), st.floats(allow_nan=False), st.text(max_size=8),
+                         st.lists(st.integers(0, 9), min_size=1, max_size=3))
+PARAMS_FILES = st.one_of(
+    st.text(max_size=60),
+    st.dictionaries(st.sampled_from(["homeo_decision", "homeo_world", "/**", "x y"]),
+                    st.fixed_dictionaries({"ros__parameters": st.dictionaries(
+                        st.sampled_from(["seed", "dod", "xi", "iterations", "a.b", ""]), PARAM_VALUES, max_size=3)}),
+                    max_size=2).map(lambda d: __import__("yaml").safe_dump(d)))
+
+
+@FAST
+@given(content=PARAMS_FILES)
+@example(content="homeo_decision:\n  ros__parameters:\n    seed: [1, {a: 2}\n")  # the hand case: unclosed
+def test_any_params_file_is_taken_by_rcl_or_refused_in_one_line_before_a_node_starts(tmp_path, content, capfd):
+    """``ros2 launch homeo_robot sim.launch.py params_file:=FILE``: the file rcl will read in every node,
+    judged by rcl's own parser in the launch. A file it refuses is one line naming it, and nothing else
+    reaches the terminal (rcl's own "Failed to parse global arguments" log is kept out)."""
+    import yaml
+
+    from homeo_launch.ros_launch import LaunchArgError, values
+
+    path = tmp_path / "params.yaml"
+    path.write_text(content)
+    given = {k: "" for k in ("seed", "iterations", "rate", "dod", "xi", "human", "human_timeout", "namespace",
+                             "record", "scenario", "load_q", "save_q", "trace")}
+    given.update(intention="oracle", data_dir="out", max_restarts="3", checkpoints="true", json="false",
+                 params_file=str(path))
+    capfd.readouterr()
+    try:
+        values(given, "sim")
+    except LaunchArgError as exc:
+        assert str(exc).startswith("launch argument params_file: ") and "\n" not in str(exc), exc
+        assert str(path) in str(exc)
+        assert capfd.readouterr().err == ""
+        return
+    yaml.safe_load(content)  # rcl took it: YAML (PyYAML, a second reader, reads it too; raises if not)
+
+
+def test_params_files_by_hand(tmp_path):
+    """The shipped config/params.yaml is taken; a missing file, a folder and an unclosed list are refused."""
+    from homeo_msgs_py.node_base import ros_args_refusal
+
+    repo = Path(__file__).resolve().parents[1]
+    assert ros_args_refusal(["--ros-args", "--params-file", str(repo / "config" / "params.yaml")]) is None
+    (tmp_path / "bad.yaml").write_text("homeo_decision:\n  ros__parameters:\n    seed: [1, {a: 2}\n")
+    for path, why in ((tmp_path / "gone.yaml", "Error opening YAML file"), (tmp_path / "bad.yaml", "near line 3")):
+        refusal = ros_args_refusal(["--ros-args", "--params-file", str(path)])
+        assert refusal is not None and why in refusal and str(path) in refusal and ", at /" not in refusal, refusal
+
+
+def test_a_node_given_a_params_file_rcl_refuses_says_so_in_one_line_exit_2(tmp_path):
+    """``ros2 run homeo_robot homeo-decision-node --ros-args --params-file FILE``: no traceback."""
+    import subprocess
+    import sys
+
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("homeo_decision:\n  ros__parameters:\n    seed: [1, {a: 2}\n")
+    r = subprocess.run([sys.executable, "-m", "homeo_decision.node", "--ros-args", "--params-file", str(bad)],
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2, r.stderr
+    assert r.stderr.count("\n") == 1 and r.stderr.startswith("error: Couldn't parse params file"), r.stderr

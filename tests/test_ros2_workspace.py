@@ -8,7 +8,8 @@ sourced, and driven by the real ``ros2`` command line and launch system (``tests
 - Ctrl-C of ``ros2 launch``: every node exits 0, no traceback in any log, and the interrupted run's
   summary counts the ticks that ran;
 - a path set over the network with ``ros2 param set`` outside the data directory is refused;
-- ``ros2 run`` starts any executable of the package, a bad parameter is one line and exit 2.
+- ``ros2 run`` starts any executable of the package, a bad parameter is one line and exit 2; a parameters
+  file rcl cannot parse is one line from ``ros2 run`` and from ``ros2 launch`` (before any node starts).
 """
 
 from __future__ import annotations
@@ -81,6 +82,18 @@ def test_ros2_run_starts_an_executable_and_a_bad_parameter_is_one_line(ws, env):
     r = ros2cli.run(ws, f"ros2 run {ros2cli.PACKAGE} homeo-world-node --ros-args -p world:=tiago", env)
     lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
     assert r.returncode == 2 and len(lines) == 1 and "no world 'tiago'" in lines[0], r.stderr
+
+
+def test_a_params_file_rcl_cannot_parse_is_one_line_from_ros2_run_and_ros2_launch(ws, env, tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("homeo_decision:\n  ros__parameters:\n    seed: [1, {a: 2}\n")  # an unclosed list
+    r = ros2cli.run(ws, f"ros2 run {ros2cli.PACKAGE} homeo-decision-node --ros-args --params-file {bad}", env)
+    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert r.returncode == 2 and len(lines) == 1 and "Couldn't parse params file" in lines[0], r.stderr
+    r = ros2cli.run(ws, f"ros2 launch {ros2cli.PACKAGE} sim.launch.py params_file:={bad}", env, timeout=120)
+    out = r.stdout + r.stderr
+    assert r.returncode != 0 and "launch argument params_file: Couldn't parse params file" in out, out[-3000:]
+    assert "Traceback" not in out and "process started" not in out, out[-3000:]  # refused before any node
 
 
 def _wait_running(ws, env, proc, bound: float = 90.0) -> None:

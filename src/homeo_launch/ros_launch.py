@@ -89,6 +89,12 @@ def values(given: dict, world: str) -> dict:
                 out[name] = specs[name].parse(text)
             except ValueError as exc:
                 raise LaunchArgError(f"launch argument {exc}") from None
+    if out.get("params_file"):  # read by rcl in every node: judged by rcl here, before any node starts
+        from homeo_msgs_py.node_base import ros_args_refusal
+
+        refusal = ros_args_refusal(["--ros-args", "--params-file", out["params_file"]])
+        if refusal is not None:
+            raise LaunchArgError(f"launch argument params_file: {refusal}")
     modes = {"sim": (ORACLE, BAYES), "pepper": ("cues", BAYES)}[world]
     if out["intention"] not in modes:
         raise LaunchArgError(f"launch argument intention must be one of {', '.join(modes)}, not {out['intention']!r}")

@@ -6,6 +6,7 @@ vocabulary comes from the subclass (``homeo_decision.node_runtime.ScenarioNode``
 from __future__ import annotations
 
 import os
+import re
 import signal
 import sys
 import time
@@ -366,6 +367,35 @@ def config_error_line(exc: Exception) -> str:
     return "error: " + one_line(str(exc).strip())
 
 
+# where rcl says in its message which of its C sources refused: not the user's business
+_RCL_SOURCE = re.compile(r", at /\S+:\d+")
+
+
+def ros_args_refusal(args=None) -> str | None:
+    """rcl's own reading of the ROS arguments (``--params-file``, ``-p``, remaps; ``None``: the process's
+    command line): None if rcl takes them, else why, in one line. rcl's parse is the one the node
+    will run, so a parameters file is judged by the parser that reads it, not a second one of ours.
+    rcl also logs "Failed to parse global arguments" to stderr; that is muted for the parse, so the
+    user reads one line."""
+    from rclpy.context import Context
+    from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+
+    context = Context()
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 2)
+        context.init(args)
+    except _rclpy.RCLError as exc:
+        return one_line(_RCL_SOURCE.sub("", str(exc)).removeprefix("failed to initialize rcl: "))
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+        context.try_shutdown()
+    return None
+
+
 def run_node(factory: Callable[[], Node], args=None, config_errors: tuple = ()) -> int:
     """Build the node, spin until Ctrl-C / SIGTERM / shutdown, always destroy it and shut down; exit
     code 0 however it was stopped (2: a bad start-up configuration). ``config_errors``: more
@@ -376,6 +406,10 @@ def run_node(factory: Callable[[], Node], args=None, config_errors: tuple = ()) 
     # a helper thread (the checkpoint writer, a blocking world's worker) hands the GIL back within
     # 0.5 ms when a message wakes the main thread, not CPython's 5 ms: the tick never waits on it long
     sys.setswitchinterval(SWITCH_INTERVAL_S)
+    refusal = ros_args_refusal(args)  # else rclpy.init raises it with a traceback
+    if refusal is not None:
+        print(f"error: {refusal}", file=sys.stderr)
+        return 2
     rclpy.init(args=args)  # installs SIGINT/SIGTERM handlers that end spin()
     node = None
     code = 0
