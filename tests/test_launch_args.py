@@ -6,6 +6,7 @@ from __future__ import annotations
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 
@@ -67,3 +68,32 @@ def test_data_dir_resolution(tmp_path):
     for bad in ("../q.json", "/etc/passwd", "link/q.json", str(tmp_path / "q.json"), ".", "a\0b"):
         with pytest.raises(OutsideDataDir):
             resolve(str(base), bad)
+
+
+def _launch_values(**given) -> dict:
+    from homeo_launch.ros_launch import COMMON, WORLD_ARGS, values
+
+    return values({**{n: d for n, d, _ in COMMON + WORLD_ARGS["sim"]}, **given}, "sim")
+
+
+@pytest.mark.parametrize("given, ns", [("", ""), ("r1", "/r1"), ("/r1/", "/r1"), ("r1/a", "/r1/a")])
+def test_ros2_launch_namespace_is_the_nodes_own_in_the_recording_too(tmp_path, given, ns):
+    """``ros2 launch homeo_robot sim.launch.py namespace:=r1 record:=BAG``: the nodes publish under /r1, and
+    the recorder keeps the topics its manifest names, so the manifest must name /r1/homeo/..., not
+    r1/homeo/... (a bag of /diagnostics alone, as it was)."""
+    from homeo_launch.record import read_manifest
+    from homeo_launch.ros_launch import _recording
+
+    v = _launch_values(namespace=given, record=str(tmp_path / "bag"), data_dir=str(tmp_path))
+    assert v["namespace"] == ns
+    _bag, _launcher, _settings, topics = read_manifest(Path(_recording(v, "sim")))
+    names = [t.name for t in topics if t.name != "/diagnostics"]
+    assert names and all(n.startswith(f"{ns}/homeo/") for n in names), names
+
+
+@pytest.mark.parametrize("bad", ["1r", "r/../x", "a b"])
+def test_ros2_launch_namespace_that_is_not_a_ros_name_is_one_line(bad):
+    from homeo_launch.ros_launch import LaunchArgError
+
+    with pytest.raises(LaunchArgError, match="^launch argument namespace .* is not a ROS name"):
+        _launch_values(namespace=bad)

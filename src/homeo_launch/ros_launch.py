@@ -89,6 +89,12 @@ def values(given: dict, world: str) -> dict:
                 out[name] = specs[name].parse(text)
             except ValueError as exc:
                 raise LaunchArgError(f"launch argument {exc}") from None
+    from .processes import check_namespace
+
+    try:  # '/r1' as the nodes and the recorder's topic list both need it, whether 'r1' or '/r1' was given
+        out["namespace"] = check_namespace(out["namespace"])
+    except ValueError as exc:
+        raise LaunchArgError(f"launch argument {exc}") from None
     if out.get("params_file"):  # read by rcl in every node: judged by rcl here, before any node starts
         from homeo_msgs_py.node_base import ros_args_refusal
 
@@ -155,13 +161,10 @@ def _graph(context, world: str, names: list):
     from homeo_msgs_py.auth import ENV as AUTH_ENV
     from homeo_msgs_py.auth import make_secret
 
-    from .processes import check_namespace, dds_defaults
+    from .processes import dds_defaults
 
     v = values({n: LaunchConfiguration(n).perform(context) for n in names}, world)
-    try:
-        ns = check_namespace(v["namespace"])
-    except ValueError as exc:
-        raise LaunchArgError(f"launch argument {exc}") from None
+    ns = v["namespace"]
     session = uuid.uuid4().hex[:12]
     spool = _recording(v, world) if v["record"] else ""
     key_file, secret_dir = make_secret()  # the graph signs its messages (docs/SECURITY.md)
