@@ -236,3 +236,33 @@ def test_a_process_is_named_by_pid_and_start_and_a_zombie_no_longer_runs():
         p.kill()
         p.wait()
     assert record.proc_start(p.pid) is None  # reaped: gone (unless the pid was given again meanwhile)
+
+
+_FULL_DISK = """
+import os, resource, signal, sys
+from pathlib import Path
+sys.path.insert(0, {tests!r})
+from test_recover import _left_folder
+from homeo_launch import record
+from homeo_launch.watch import merge_recording
+tmp = Path({tmp!r})
+folder = _left_folder(tmp, tmp / "bag", [os.getpid(), record.proc_start(os.getpid()) + 1])
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails with EFBIG, as on a full disk
+resource.setrlimit(resource.RLIMIT_FSIZE, (300, resource.RLIM_INFINITY))
+merge_recording(folder)
+"""
+
+
+def test_the_bag_a_launch_file_could_not_write_leaves_no_half_bag_and_recover_writes_it_later(tmp_path):
+    """``homeo-launch watch`` (under ros2 launch) merges the recording when the run ends; when the bag
+    cannot be written (here a file-size limit: EFBIG, as a full disk's ENOSPC) it says so in one line and
+    keeps the folder, and leaves no half bag, which would make ``homeo-launch recover`` refuse
+    ("its bag already exists")."""
+    r = subprocess.run([sys.executable, "-c", _FULL_DISK.format(tests=str(Path(__file__).parent), tmp=str(tmp_path))],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0 and r.stderr.count("\n") == 1, r.stderr
+    assert "the recording stays: " in r.stderr and "writing" in r.stderr and "File too large" in r.stderr, r.stderr
+    assert not (tmp_path / "bag").exists()
+    (folder,) = tmp_path.glob(record.SPOOL_PREFIX + "*")
+    r = _cli("recover", "--data-dir", tmp_path)
+    assert r.returncode == 0 and r.stdout == f"recovered {tmp_path / 'bag'}: 3 messages (from {folder.name})\n", r

@@ -142,6 +142,25 @@ class WriterBag:
         self.spool_dir = None
 
 
+def spools_to_bag(folder: Path, bag: Path, info: dict, topics: list[Tapped]) -> int:
+    """``merge_spools``, then the spool folder deleted; if it fails no half bag is left to block a
+    second try (``homeo-launch recover``): a one-line ``NotRecovered`` for a full disk or a folder not
+    writable, and the folder kept."""
+    import shutil
+
+    from rosbags.rosbag2 import WriterError
+
+    try:
+        n = merge_spools(folder, bag, info, topics)
+    except BaseException as exc:  # Ctrl-C too
+        shutil.rmtree(bag, ignore_errors=True)
+        if isinstance(exc, (OSError, WriterError)):
+            raise NotRecovered(f"{folder}: writing {bag}: {getattr(exc, 'strerror', None) or exc}") from None
+        raise
+    shutil.rmtree(folder, ignore_errors=True)
+    return n
+
+
 def merge_spools(spool_dir: Path, path: Path, info: dict, topics: list[Tapped]) -> int:
     """The spools of ``spool_dir`` merged in the order sent into a new bag at ``path`` (as ``BagSink``
     writes one); the number of messages written. Topics outside ``topics`` are left out."""

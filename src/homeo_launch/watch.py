@@ -10,7 +10,6 @@ Ctrl-C (ros2 launch passes it on) prints the run so far, with its real tick coun
 from __future__ import annotations
 
 import json
-import shutil
 import signal
 import sys
 from pathlib import Path
@@ -93,13 +92,12 @@ def print_log(status: dict, as_json: bool) -> int:
 def merge_recording(folder: Path) -> None:
     """The spool folder a launch file made (its manifest names the bag) merged into the bag; kept,
     with one line, when that cannot be done (``homeo-launch recover`` tries again)."""
-    from .record import NotRecovered, merge_spools, read_manifest
+    from .record import NotRecovered, read_manifest, spools_to_bag
 
     try:
         bag, _, info, topics = read_manifest(folder)
-        merge_spools(folder, bag, info, topics)
+        spools_to_bag(folder, bag, info, topics)
     except (NotRecovered, OSError, ValueError) as exc:
-        print(f"{PROG}: the recording stays in {folder}: {exc}", file=sys.stderr)
+        print(f"{PROG}: the recording stays: {exc}", file=sys.stderr)  # exc names the folder
         return
-    shutil.rmtree(folder, ignore_errors=True)
     print(f"{PROG}: recorded {bag}", file=sys.stderr)

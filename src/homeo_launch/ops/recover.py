@@ -10,7 +10,6 @@ launcher still runs is a live recording and is left alone; an existing bag is ne
 
 from __future__ import annotations
 
-import shutil
 import sys
 from pathlib import Path
 
@@ -18,7 +17,7 @@ from homeo_msgs_py import data_dir
 from homeo_msgs_py.cli_args import UserError
 from homeo_msgs_py.schemas import one_line
 
-from ..record import SPOOL_PREFIX, NotRecovered, merge_spools, proc_start, read_manifest
+from ..record import SPOOL_PREFIX, NotRecovered, proc_start, read_manifest, spools_to_bag
 
 def add_parser(sub) -> None:
     r = sub.add_parser("recover", help="write the bags of recordings whose launcher was killed outright "
@@ -38,16 +37,7 @@ def recover_folder(folder: Path) -> str:
                            "move that away and run recover again")
     if not bag.parent.is_dir():
         raise NotRecovered(f"{folder}: the folder of its bag, {bag.parent}, is gone")
-    from rosbags.rosbag2 import WriterError
-
-    try:
-        n = merge_spools(folder, bag, info, topics)
-    except BaseException as exc:  # Ctrl-C too: no half bag left to block a second try
-        shutil.rmtree(bag, ignore_errors=True)
-        if isinstance(exc, (OSError, WriterError)):  # a full disk, a folder not writable
-            raise NotRecovered(f"{folder}: writing {bag}: {getattr(exc, 'strerror', None) or exc}") from None
-        raise
-    shutil.rmtree(folder, ignore_errors=True)
+    n = spools_to_bag(folder, bag, info, topics)
     return f"{bag}: {n} messages (from {folder.name})"
 
 
