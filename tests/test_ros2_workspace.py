@@ -96,6 +96,18 @@ def test_a_params_file_rcl_cannot_parse_is_one_line_from_ros2_run_and_ros2_launc
     assert "Traceback" not in out and "process started" not in out, out[-3000:]  # refused before any node
 
 
+def _wait_subscribed(ws, env, topic: str, node: str, bound: float = 60.0) -> None:
+    """Until ``ros2 topic info -v TOPIC`` lists ``node`` among its subscribers."""
+    end = time.monotonic() + bound
+    while time.monotonic() < end:
+        info = ros2cli.run(ws, f"ros2 topic info -v {topic}", env, timeout=30).stdout
+        subscribers = info.split("Subscription count:", 1)[-1]
+        if re.search(rf"^Node name: {node}$", subscribers, re.M):
+            return
+        time.sleep(0.5)
+    raise AssertionError(f"{node} never subscribed to {topic}")
+
+
 def _wait_running(ws, env, proc, bound: float = 90.0) -> None:
     end = time.monotonic() + bound
     while time.monotonic() < end:
@@ -145,9 +157,14 @@ def test_params_dump_load_and_params_file_and_paths_set_over_the_network(ws, env
 
 
 def test_ctrl_c_of_ros2_launch_stops_every_node_with_exit_0_and_no_traceback(ws, env, tmp_path):
+    from homeo_msgs_py.graph import LAUNCHER
+
     launch = ros2cli.popen(ws, f"ros2 launch {ros2cli.PACKAGE} sim.launch.py iterations:=0 rate:=50", env)
     try:
         _wait_running(ws, env, launch)
+        # the summary comes from what the launch's watcher received: on a busy machine it may discover
+        # the graph seconds after the graph runs (a CI-like run once interrupted it before it had a status)
+        _wait_subscribed(ws, env, "/homeo/run_status", LAUNCHER)
         time.sleep(2.0)
     finally:
         os.killpg(launch.pid, signal.SIGINT)  # a terminal's Ctrl-C reaches the whole foreground group
