@@ -24,7 +24,11 @@ from homeo_sim.runner import run_seeds  # noqa: E402
 from homeo_sim.sweep import SWEEPS  # noqa: E402
 
 PROG = "dod_shape.py"
-LINEAR_TOL = 0.1  # the criterion dod_linear_rsr of the thesis scenario (reference.criteria)
+# the criterion dod_linear_rsr of the thesis scenario: its tolerance, and the DoDs of the line's ends and of
+# the point checked against it; the ends are DoD 0 and 1, so shape() walks the line by the DoD itself
+LINEAR_CRITERION = next(c for c in es.SC.reference.criteria if c["id"] == "dod_linear_rsr")
+LINEAR_TOL = LINEAR_CRITERION["tol"]
+LINE_LOW, LINE_MID, LINE_HIGH = LINEAR_CRITERION["points"]
 
 
 def curve(o: dict, seeds: list[int], workers: int = 1) -> dict:
@@ -41,16 +45,16 @@ def shape(c: dict, idx: list[int]) -> dict:
     """Over the seeds at positions ``idx``: mean RSR per DoD, RSR(0.5) minus the line from RSR(0) to RSR(1),
     and the largest departure from that line over the grid (with its DoD)."""
     rsr = {d: sum(v["RSR"][i] for i in idx) / len(idx) for d, v in c.items()}
-    lo, hi = rsr[0.0], rsr[1.0]
+    lo, hi = rsr[LINE_LOW], rsr[LINE_HIGH]
     dev = {d: r - (lo + (hi - lo) * d) for d, r in rsr.items()}
     far = max(dev, key=lambda d: abs(dev[d]))
-    return {"rsr": rsr, "at_half": dev[0.5], "largest": (far, dev[far])}
+    return {"rsr": rsr, "at_half": dev[LINE_MID], "largest": (far, dev[far])}
 
 
 def report(label: str, c: dict, seeds: list[int]) -> list[str]:
     everything = shape(c, list(range(len(seeds))))
     hsr = {d: sum(v["HSR"]) / len(v["HSR"]) for d, v in c.items()}
-    sets = [shape(c, [seeds.index(s) for s in st]) for st in seed_sets(seeds)]
+    sets = [shape(c, pos) for pos in seed_sets(range(len(seeds)))]  # the seeds are distinct: by position
     held = sum(abs(s["at_half"]) <= LINEAR_TOL for s in sets)
     far, dev = everything["largest"]
     per_set = ", ".join(f"{s['at_half']:+.2f}" for s in sets)

@@ -36,7 +36,8 @@ sys.path.insert(0, str(TOOLS.parent / "src"))
 
 import joint_search as j  # noqa: E402
 from homeo_msgs_py.cli_args import Parser, UserError, float_in, int_at_least, run_command  # noqa: E402
-from homeo_sim.report.fidelity import GOALS, error_summary, relative_errors, seed_sets, statement_shares  # noqa: E402
+from homeo_sim.report.fidelity import (GOALS, error_summary, relative_errors, seed_sets, set_aggregates,  # noqa: E402
+                                       statement_shares, statements_goal_met)
 from homeo_sim.runner import run_seeds  # noqa: E402
 from homeo_sim.stats import aggregate  # noqa: E402
 from homeo_sim.sweep import SWEEPS  # noqa: E402
@@ -121,12 +122,10 @@ def add_statements(e: dict, statement_seeds: list[int], dods=DOD_SEARCH, workers
         else:
             runs[lab] = [r.metrics for r in run_seeds(cfg, statement_seeds, workers)]
     runs["pseudo=True"] = runs["base"]  # the default run has the pseudo update on
-    idx = {s: i for i, s in enumerate(statement_seeds)}
-    sets = seed_sets(statement_seeds)
-    M_sets = [{lab: aggregate([v[idx[s]] for s in st], DRIVES) for lab, v in runs.items()} for st in sets]
+    M_sets = set_aggregates(runs, DRIVES)
     sh = statement_shares(SC.reference.criteria, M_sets, {**SWEEPS, "dod": tuple(dods)}, {"dod": cfgs["base"].dod})
-    e.update(met_per_set=sh["met_per_set"], shares={x["id"]: x["held"] for x in sh["shares"]}, n_sets=len(sets))
-    e["goals"]["statements_per_set"] = min(e["met_per_set"]) >= GOALS["statements_per_set"] * len(SC.reference.criteria)
+    e.update(met_per_set=sh["met_per_set"], shares={x["id"]: x["held"] for x in sh["shares"]}, n_sets=len(M_sets))
+    e["goals"]["statements_per_set"] = statements_goal_met(e["met_per_set"], len(SC.reference.criteria))
     e["score"] = score(e)
     return e
 
@@ -158,8 +157,8 @@ def line(e: dict) -> str:
 
 
 def diff(o: dict, ref: dict) -> str:
-    ch = [f"{k}={json.dumps(o[k])}" for k in SEARCHED if o.get(k) != ref.get(k)]
-    return ", ".join(ch) or "(as the current default)"
+    """``joint_search.diff`` over this search's choices."""
+    return j.diff(o, ref, SEARCHED)
 
 
 # -- the search --------------------------------------------------------------------------------------
@@ -272,16 +271,6 @@ def read_trials(path: str) -> list[dict]:
     return out
 
 
-def best_distinct(evals: list[dict], k: int) -> list[dict]:
-    seen, out = set(), []
-    for e in sorted(evals, key=lambda e: -e["score"]):
-        key = json.dumps(e["open"], sort_keys=True)
-        if key not in seen:
-            seen.add(key)
-            out.append(e)
-    return out[:k]
-
-
 def select(points: list[dict], slack: float = 2.0) -> dict:
     """Among the points whose score is within ``slack`` of the best, the closest to the text; then the
     higher score."""
@@ -363,7 +352,7 @@ def main(argv=None) -> int:
             return 0
         if a.cmd == "refine":
             t_seeds, s_seeds = seeds_arg(a.search_seeds), seeds_arg(a.statement_seeds)
-            best = best_distinct(read_trials(a.trials_file), 1)[0]
+            best = j.best_distinct(read_trials(a.trials_file), 1)[0]
             cur = refine(best["open"], t_seeds, s_seeds, Path(a.out), a.rounds, a.top, a.workers)
             print(f"refined: {line(cur)}\n```json\n" + json.dumps({k: cur["open"][k] for k in SEARCHED}, indent=1)
                   + "\n```")
@@ -381,7 +370,7 @@ def main(argv=None) -> int:
             out = Path(a.out)
             out.mkdir(parents=True, exist_ok=True)
             with (out / "validate.jsonl").open("w") as log:
-                for p in best_distinct(evals, a.best):
+                for p in j.best_distinct(evals, a.best):
                     e = evaluate(p["open"], seeds, seeds, dods=SWEEPS["dod"], workers=a.workers, gate=None)
                     e["trial"], e["search_score"] = p.get("trial"), p["score"]
                     points.append(e)

@@ -242,8 +242,10 @@ RESUME_HINTS = ({"time_increase": "before_action"}, {"drive_growth": {"NSoc": "h
                 {"drive_growth": {"NRes": "not_lowered"}}, {"no_activated_motivation": "none"})
 
 
-def diff(o: dict, ref: dict) -> str:
-    ch = [f"{k}={json.dumps(o[k])}" for k in SEARCHED if o[k] != ref[k]]
+def diff(o: dict, ref: dict, keys=SEARCHED) -> str:
+    """The ``keys`` on which ``o`` differs from ``ref``, as ``key=JSON``."""
+    # get: an open block read from a trials file may lack a key (error_search); missing on both sides is no change
+    ch = [f"{k}={json.dumps(o[k])}" for k in keys if o.get(k) != ref.get(k)]
     return ", ".join(ch) or "(as the current default)"
 
 
@@ -387,17 +389,23 @@ def _validation(validate: tuple[str, int] | None, s_seeds: list[int], c_seeds: l
     return v_seeds, validate[1]
 
 
+def best_distinct(evals: list[dict], k: int | None = None) -> list[dict]:
+    """The ``k`` best-scored points (default: all), each open block once (its best trial)."""
+    seen, out = set(), []
+    for e in sorted(evals, key=lambda e: -e["score"]):
+        key = json.dumps(e["open"], sort_keys=True)
+        if key not in seen:
+            seen.add(key)
+            out.append(e)
+    return out[:k]
+
+
 def confirm(evals, t_search, trials, s_seeds, c_seeds, n_confirm, sampler_seed, outp: Path, workers: int,
             validate: tuple[list[int], int] | None = None) -> dict:
     t0 = time.time()
     start = current_open()
     # confirm the best few distinct points (and the current default) on seeds never searched
-    ranked, seen = [], set()
-    for e in sorted(evals, key=lambda e: -e["score"]):
-        key = json.dumps(e["open"], sort_keys=True)
-        if key not in seen:
-            seen.add(key)
-            ranked.append(e)
+    ranked = best_distinct(evals)
     v_seeds = []
     if validate:  # re-rank the best few on seeds of their own: the search's 8 seeds overrate its best points
         v_seeds, k = validate

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import subprocess
 import sys
 import tempfile
@@ -24,14 +23,16 @@ from pathlib import Path
 
 from homeo_launch.ops import profile
 from homeo_launch.ops.soak import cpu_s, rss_mb
+from homeo_launch.procfs import stat_fields
 from homeo_msgs_py.graph import NODES
 
 
 def node_pids(launcher: int) -> dict:
     out = {}
     for d in Path("/proc").iterdir():
+        stat = stat_fields(d.name) if d.name.isdigit() else None  # None: not a process (or gone)
         try:
-            if d.name.isdigit() and int((d / "stat").read_text().rsplit(")", 1)[1].split()[1]) == launcher:
+            if stat is not None and int(stat[1]) == launcher:  # its parent (field 4) is the launcher
                 cmd = (d / "cmdline").read_bytes().split(b"\0")
                 mod = cmd[cmd.index(b"-m") + 1].decode() if b"-m" in cmd else ""
                 out.update({n: int(d.name) for n, desc in NODES.items() if desc.module == mod})

@@ -73,7 +73,7 @@ class DecisionNode(durable.CheckpointedNode, ScenarioNode):
         self.pub = self.robot_publisher("action")
         self.subscribe("drives", lambda m: self._put("drives", m))
         self.trigger("~/save_q", self._save)
-        self.trigger("~/load_q", lambda: self._load())
+        self.trigger("~/load_q", self._load)
         self.trigger("~/reset", self._reset)
 
     # -- parameters ---------------------------------------------------------------------

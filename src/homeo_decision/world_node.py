@@ -70,7 +70,7 @@ class WorldNode(durable.DurableWorld, ScenarioNode):
             self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix=f"{v['world']}-io")
             run_async = self._pool.submit
         # a respawned node's trace goes on where its checkpoint left it (restore_world cuts it there)
-        trace = self._open_trace(v["trace_path"], keep=cfg["respawned"], trusted=True)
+        trace = self._open_trace(v["trace_path"], keep=cfg["respawned"])
         self.pubs = {key: self.publisher(key) for key in DESC.publishes}
         self.host = WorldHost(self.world, self._send, iterations=v["iterations"], rate=v["rate"],
                               timeout=v["action_timeout"], run_async=run_async, log=self._log, note=self.rejects.note,
@@ -88,6 +88,7 @@ class WorldNode(durable.DurableWorld, ScenarioNode):
         self._wait_logged = self._status_at = 0.0
         self._status_key = None
         self._timer = self.create_timer(POLL_S, self._poll)
+        self._period_ns = self._timer.timer_period_ns  # kept here: reading it back is a call into rcl
 
     def _send(self, key: str, tick: int, fields: dict, run: int) -> None:
         self.send(self.pubs[key], tick, fields, run)
@@ -127,9 +128,11 @@ class WorldNode(durable.DurableWorld, ScenarioNode):
                     return SetParametersResult(successful=False, reason=reason)
         return SetParametersResult(successful=True)  # seed and trace_path take effect at the next ~/reset
 
-    def _open_trace(self, path: str, keep: bool = False, trusted: bool = False):
+    def _open_trace(self, path: str, keep: bool = False):
+        """The trace file at ``path``, trusted: the start value, or one ``_on_params`` already checked
+        inside the data directory when it was set."""
         try:
-            path = self.data_path(path, "trace_path", trusted)
+            path = self.data_path(path, "trace_path", trusted=True)
         except OutsideDataDir as exc:
             raise NodeConfigError(str(exc)) from None
         if not path:
@@ -172,8 +175,8 @@ class WorldNode(durable.DurableWorld, ScenarioNode):
             if drv.state == DONE and self.host.trace is not None:
                 self.host.trace.flush()
         period = int(poll_period(drv, self.world.blocking) * 1e9)
-        if self._timer.timer_period_ns != period:
-            self._timer.timer_period_ns = period
+        if period != self._period_ns:
+            self._timer.timer_period_ns = self._period_ns = period
         key = (drv.state, drv.tick, drv.phase)
         now = time.monotonic()
         if (key != self._status_key and now - self._status_at >= STATUS_PERIOD_S) or now - self._status_at > STATUS_IDLE_S:
@@ -199,7 +202,7 @@ class WorldNode(durable.DurableWorld, ScenarioNode):
     def _reset(self) -> tuple[bool, str]:
         seed = self.get_parameter("seed").value
         try:  # the start value, or one set since (checked inside the data directory when it was set)
-            trace = self._open_trace(self.get_parameter("trace_path").value, trusted=True)
+            trace = self._open_trace(self.get_parameter("trace_path").value)
         except NodeConfigError as exc:
             return False, str(exc)
         self.host.reset(seed, trace)

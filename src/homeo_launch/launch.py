@@ -68,11 +68,12 @@ def graph_specs(o: GraphOptions) -> list[NodeSpec]:
     common = {"scenario": o.scenario or "", "overrides": overrides_param(dict(o.overrides)),
               "data_dir": os.path.abspath(o.data_dir), "extra_readers": o.extra_readers}
     decision = dict(common, seed=o.seed, **o.learning)
-    q_path = o.save_q or o.load_q  # where ~/save_q writes (the user's own paths: anywhere)
+    # where ~/save_q writes: the user's own paths (anywhere), '~' expanded by every front end (cli_args.user_path)
+    q_path = o.save_q or o.load_q
     if q_path:
-        decision["q_table_path"] = os.path.abspath(os.path.expanduser(q_path))
+        decision["q_table_path"] = os.path.abspath(q_path)
     if o.load_q:  # a Q-table file or a decision checkpoint
-        decision["start_from"] = os.path.abspath(os.path.expanduser(o.load_q))
+        decision["start_from"] = os.path.abspath(o.load_q)
     world = dict(common, world=o.world, seed=o.seed, intention_learns=o.intention == BAYES, **o.world_params)
     params = {WORLD: world, "homeo_intention": dict(common, mode=o.intention), "homeo_drives": dict(common),
               "homeo_decision": decision}
@@ -142,13 +143,13 @@ def run_graph(o: GraphOptions, *, quiet: bool = False, log_dir: str | None = Non
         out["elapsed_s"] = run.elapsed_s()
         out["rss_mb"] = graph.rss_mb()
         if o.save_q:
-            ok, msg = save_q(mon, o)
+            ok, msg = save_q(mon)
             if not ok:
                 raise GraphError(f"saving the Q-table failed: {msg}")
         return out
     except KeyboardInterrupt:
         if mon is not None and o.save_q:  # what the user asked for, before the nodes stop
-            ok, msg = save_q(mon, o)
+            ok, msg = save_q(mon)
             if not quiet or not ok:
                 print(f"{PROG}: " + (f"saved the Q-table {o.save_q}" if ok else f"warning: the Q-table was not saved: "
                                      f"{msg}"), file=sys.stderr)
@@ -238,6 +239,7 @@ def new_session() -> str:
     return uuid.uuid4().hex[:12]
 
 
-def save_q(mon: Monitor, o) -> tuple[bool, str]:
-    """Ask the decision node to save its table to ``--save-q``, its q_table_path (also on Ctrl-C)."""
-    return mon.call_trigger("homeo_decision/save_q", timeout=5.0)
+def save_q(mon: Monitor, timeout: float = 5.0) -> tuple[bool, str]:
+    """Ask the decision node to save its table to ``--save-q``, its q_table_path (also on Ctrl-C);
+    ``homeo-launch watch`` asks the same, with its own timeout."""
+    return mon.call_trigger("homeo_decision/save_q", timeout=timeout)

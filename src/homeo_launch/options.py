@@ -140,29 +140,31 @@ def check_resume(d: str, sc, bayes: bool) -> None:
         raise UserError(f"--resume: {exc}") from None
 
 
-def check_files(a, read=(), write=(), tables=(), sc=None) -> None:
-    """The file options of a launch, before anything starts: the ones read existing, the Q-tables
-    (``tables``) loading into the scenario ``sc`` (a Q-table file or a decision checkpoint), the ones
-    written not a directory and in a folder that exists or can be made; ``--log-dir`` writable.
-    Raises UserError (one line). They may lie anywhere: the user's own command line is trusted
-    (the data directory confines only what arrives over the network, ``homeo_msgs_py.data_dir``)."""
-    for opt, f in [*read, *tables]:
-        if f and not os.path.isfile(f):
+def check_files(a, write=(), tables=(), sc=None) -> None:
+    """The file options of a launch, before anything starts: the Q-tables (``tables``) existing and
+    loading into the scenario ``sc`` (a Q-table file or a decision checkpoint), the ones written not
+    a directory and in a folder that exists or can be made; ``--log-dir`` writable. Raises
+    UserError (one line). They may lie anywhere: the user's own command line is trusted (the data
+    directory confines only what arrives over the network, ``homeo_msgs_py.data_dir``); ``~`` is
+    expanded already (``cli_args.user_path``)."""
+    tables = [(opt, f) for opt, f in tables if f]
+    for opt, f in tables:  # every missing file first, then what does not load
+        if not os.path.isfile(f):
             raise UserError(f"{opt} {f}: file not found")
     for opt, f in tables:
-        if f:
-            from homeo_decision.checkpoint import load_table
-            from homeo_decision.objectq import ObjectQ
+        from homeo_decision.checkpoint import load_table
+        from homeo_decision.objectq import ObjectQ
 
-            load_table(ObjectQ(sc), f)  # QTableError: one line, exit 2
+        load_table(ObjectQ(sc), f)  # QTableError: one line, exit 2
     for opt, f in write:
-        if f and os.path.isdir(f):
+        if not f:
+            continue
+        if os.path.isdir(f):
             raise UserError(f"{opt} {f} is a directory, not a file")
-        if f:
-            try:
-                os.makedirs(os.path.dirname(os.path.abspath(os.path.expanduser(f))), exist_ok=True)
-            except OSError as exc:
-                raise UserError(f"{opt} {f}: {exc.strerror}") from None
+        try:
+            os.makedirs(os.path.dirname(os.path.abspath(f)), exist_ok=True)
+        except OSError as exc:
+            raise UserError(f"{opt} {f}: {exc.strerror}") from None
     if getattr(a, "log_dir", None):
         try:
             os.makedirs(a.log_dir, exist_ok=True)

@@ -15,8 +15,9 @@ from __future__ import annotations
 import os
 import sys
 
+from homeo_msgs_py.data_dir import DEFAULT as DATA_DIR  # the launchers' default data directory
+
 ROS_OWN = ("use_sim_time", "start_type_description_service")  # rclpy declares these on every node
-DATA_DIR = "out"
 
 
 def node_classes(world: str) -> list:
@@ -36,7 +37,9 @@ def defaults(world: str = "sim") -> dict:
     """``{"/NODE": {"ros__parameters": {name: default}}}`` for the graph with ``world``."""
     import rclpy
 
-    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    from .processes import dds_defaults
+
+    os.environ.update(dds_defaults())  # the nodes stay on this machine, as a launcher's do
     os.environ.pop("HOMEO_AUTH_FILE", None)  # no graph secret: the defaults of an unsigned node
     rclpy.init(args=["--ros-args", "-p", f"world:={world}", "-p", f"data_dir:={DATA_DIR}"])
     out = {}

@@ -57,12 +57,11 @@ def run_robot(a, label: str, dod: float | None, q_table: str | None, log_dir: Pa
               last: dict | None = None, sinks=()) -> dict:
     """One graph run (with its own stand-in when asked); returns the label, the DoD, the status and the user log."""
     from pepper_bridge.launch_support import StandinProcess, check_standin
-    from pepper_bridge.user import load_script
 
     script, overrides = None, {}
     if a.script:
         script = _script_path(a.script)
-        drives = (load_script(script).get("robot") or {}).get("drives")
+        drives = script_drives(script)
         if drives:
             overrides["initial_drives"] = dict(drives)
     standin = None
@@ -100,6 +99,14 @@ def run_robot(a, label: str, dod: float | None, q_table: str | None, log_dir: Pa
     finally:
         if standin is not None:
             standin.stop()
+
+
+def script_drives(path) -> dict | None:
+    """The scripted user's ``robot.drives`` (None: not given): the drives node's initial drives;
+    ``ros2 launch ... standin:=true script:=FILE`` reads them too (``ros_launch.py``)."""
+    from pepper_bridge.user import load_script
+
+    return (load_script(path).get("robot") or {}).get("drives")
 
 
 def _script_path(s: str) -> Path:
@@ -213,6 +220,13 @@ def done_note(r: dict) -> str:
 HEADER = f"{'#':>3}  {'m_dom':<10} {'intention':<9} {'action':<8} {'fb':>3}  {'proposal':<8}  done"
 
 
+def print_log_table(log: list, missed: int, table: list[str] | None = None) -> None:
+    """The end of a run's text output: ``table`` (default: HEADER and a row per interaction of
+    ``log``), then the count line; ``homeo-launch watch`` prints the same (``watch.print_log``)."""
+    print("\n".join(table if table is not None else [HEADER, *map(row_line, log)]))
+    print(f"{len(log)} interactions, {missed} missed")
+
+
 def cmd_pepper(a) -> int:
     from homeo_decision.qtable_io import QTableError
     from pepper_bridge.config import ConfigError
@@ -285,8 +299,7 @@ def _cmd_one(a, base: Path) -> int:
             out["restarts"] = st["restarts"]
         print(json.dumps(out, indent=1))
         return code
-    print("\n".join(format_table(res)) if res.user_log else "\n".join([HEADER, *map(row_line, res.log)]))
-    print(f"{len(res.log)} interactions, {st.get('missed', 0)} missed")
+    print_log_table(res.log, st.get("missed", 0), format_table(res) if res.user_log else None)
     if st.get("restarts"):
         print("restarts: " + ", ".join(f"{n} {k}" for n, k in sorted(st["restarts"].items())))
     return code

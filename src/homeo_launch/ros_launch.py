@@ -20,7 +20,8 @@ from __future__ import annotations
 
 import os
 
-from homeo_msgs_py.graph import BAYES, GRAPH, NODES, ORACLE, WORLD
+from homeo_msgs_py.cli_args import user_path
+from homeo_msgs_py.graph import BAYES, GRAPH, INTENTION_MODES, NODES, WORLD
 from homeo_msgs_py.learning import DOD, XI
 
 PACKAGE = "homeo_robot"
@@ -53,10 +54,12 @@ WORLD_ARGS = {
                ("script", "", "the stand-in's scripted user (a file of pepper_bridge/scripts/ or a path)"),
                ("config", "", "the robot's meaning of the scenario's names (default pepper_bridge/scripts/pepper.json)")),
 }
-# launch argument -> (node, parameter) for the arguments that are node parameters as they stand
-AS_PARAMS = {"seed": [(WORLD, "seed"), ("homeo_decision", "seed")], "iterations": [(WORLD, "iterations")],
-             "rate": [(WORLD, "rate")], DOD.name: [("homeo_decision", DOD.name)], XI.name: [("homeo_decision", XI.name)],
-             "human": [(WORLD, "human")], "human_timeout": [(WORLD, "human_timeout")]}
+# the arguments that are node parameters as they stand, routed as homeo-launch routes them
+# (GraphOptions.world_params and .learning); seed, the world's and the decision's, is node_params' own
+WORLD_AS_PARAMS = ("iterations", "rate", "human", "human_timeout")
+LEARNING_AS_PARAMS = (DOD.name, XI.name)
+# the arguments that name the user's files: '~' is their home, as on homeo-launch's command line
+USER_PATHS = ("data_dir", "record", "load_q", "save_q", "trace", "config")
 
 
 class LaunchArgError(ValueError):
@@ -89,6 +92,9 @@ def values(given: dict, world: str) -> dict:
                 out[name] = specs[name].parse(text)
             except ValueError as exc:
                 raise LaunchArgError(f"launch argument {exc}") from None
+    for name in USER_PATHS:  # expanded once, here: every later use takes them as they are
+        if name in out:
+            out[name] = user_path(out[name])
     from .processes import check_namespace
 
     try:  # '/r1' as the nodes and the recorder's topic list both need it, whether 'r1' or '/r1' was given
@@ -101,49 +107,65 @@ def values(given: dict, world: str) -> dict:
         refusal = ros_args_refusal(["--ros-args", "--params-file", out["params_file"]])
         if refusal is not None:
             raise LaunchArgError(f"launch argument params_file: {refusal}")
-    modes = {"sim": (ORACLE, BAYES), "pepper": ("cues", BAYES)}[world]
+    modes = intention_modes(world)
     if out["intention"] not in modes:
         raise LaunchArgError(f"launch argument intention must be one of {', '.join(modes)}, not {out['intention']!r}")
     return out
 
 
+def intention_modes(world: str) -> dict:
+    """``intention:=`` -> the intention node's mode, as ``homeo-launch sim`` or ``pepper`` takes ``--intention``."""
+    if world == "pepper":
+        from .pepper import INTENTION_MODES as PEPPER_MODES
+
+        return PEPPER_MODES
+    return {m: m for m in INTENTION_MODES}
+
+
 def node_params(world: str, v: dict, session: str, spool: str) -> dict:
-    """Node name -> its parameters: the launch's own, and the launch arguments given."""
+    """Node name -> its parameters: the launch's own, and the launch arguments given (``v`` as
+    ``values`` made it, its ``script`` resolved by ``_graph``)."""
     from .launch import GraphOptions, graph_specs
 
-    data_dir = os.path.abspath(os.path.expanduser(v["data_dir"]))
-    world_params = {"qi_url": v["qi_url"], "intention_cues": v["intention"] == "cues"} if world == "pepper" else {}
-    if v.get("trace"):
-        world_params["trace_path"] = os.path.abspath(os.path.expanduser(v["trace"]))
-    if world == "pepper" and v["config"]:
-        world_params["config"] = os.path.abspath(os.path.expanduser(v["config"]))
-    if world == "pepper" and v["standin"] and v["script"]:
-        world_params["end_with_script"] = True  # the run ends with the scripted user
+    data_dir = os.path.abspath(v["data_dir"])
+    world_params = _world_params(world, v)
     overrides = ()
-    if world == "pepper" and v["standin"] and v["script"]:  # the scripted user's robot.drives: the initial drives
-        from pepper_bridge.user import load_script
+    if world == "pepper" and v["standin"] and v["script"]:  # a scripted user
+        from .pepper import script_drives
 
-        from .pepper import _script_path
-
-        drives = (load_script(_script_path(v["script"])).get("robot") or {}).get("drives")
+        world_params["end_with_script"] = True  # the run ends with it
+        drives = script_drives(v["script"])  # its robot.drives: the initial drives
         overrides = (("initial_drives", dict(drives)),) if drives else ()
-    o = GraphOptions(world=world, world_params=world_params, intention=ORACLE if v["intention"] == "cues" else
-                     v["intention"], scenario=os.path.abspath(v["scenario"]) if v["scenario"] else "",
-                     overrides=overrides,
+    o = GraphOptions(world=world, world_params=world_params, seed=v["seed"] or 0,
+                     learning=_given(v, LEARNING_AS_PARAMS), intention=intention_modes(world)[v["intention"]],
+                     scenario=os.path.abspath(v["scenario"]) if v["scenario"] else "", overrides=overrides,
                      load_q=v["load_q"] or None, save_q=v["save_q"] or None, data_dir=data_dir,
                      checkpoint_dir=os.path.join(data_dir, "checkpoints", world) if v["checkpoints"] else "",
                      session=session, max_restarts=v["max_restarts"])
     params = {s.name: s.params for s in graph_specs(o)}
     for p in params.values():
-        p.pop("seed", None)  # set below when given: else the params file's, or the node's
+        if v["seed"] == "":
+            p.pop("seed", None)  # not given: the params file's, or the node's
         p["respawn_rejoins"] = bool(o.checkpoint_dir)
         if spool:
             p["record_spool"] = spool
-    for arg, targets in AS_PARAMS.items():
-        if v.get(arg, "") != "":
-            for node, name in targets:
-                params[node][name] = v[arg]
     return params
+
+
+def _world_params(world: str, v: dict) -> dict:
+    """The world node's parameters: the launch's own (the robot, the intention's source, the files)
+    and the launch arguments given."""
+    out = {"qi_url": v["qi_url"], "intention_cues": v["intention"] == "cues"} if world == "pepper" else {}
+    if v.get("trace"):
+        out["trace_path"] = os.path.abspath(v["trace"])
+    if world == "pepper" and v["config"]:
+        out["config"] = os.path.abspath(v["config"])
+    return dict(out, **_given(v, WORLD_AS_PARAMS))
+
+
+def _given(v: dict, names) -> dict:
+    """The launch arguments of ``names`` that were given ('' = not given: left to the params file or the node)."""
+    return {n: v[n] for n in names if v.get(n, "") != ""}
 
 
 def _graph(context, world: str, names: list):
@@ -177,10 +199,11 @@ def _graph(context, world: str, names: list):
             port = s.getsockname()[1]
         v["qi_url"] = f"tcp://127.0.0.1:{port}"
         cmd = [ExecutableInPackage("homeo-pepper-standin", PACKAGE), "--listen", v["qi_url"], "--time-scale", "0"]
-        if v["script"]:
+        if v["script"]:  # resolved once: for the stand-in here and for the drives in node_params
             from .pepper import _script_path
 
-            cmd += ["--script", str(_script_path(v["script"]))]
+            v["script"] = str(_script_path(v["script"]))
+            cmd += ["--script", v["script"]]
         cmd += ["--seed", str(v["seed"] or 0)]
         actions.append(ExecuteProcess(cmd=cmd, name="pepper_standin", output="log"))
     params = node_params(world, v, session, spool)
@@ -208,9 +231,9 @@ def _recording(v: dict, world: str) -> str:
     from .record import WriterBag, check_new_bag, run_info
     from .tap import tapped_topics
 
-    bag = WriterBag(check_new_bag(os.path.expanduser(v["record"])),
+    bag = WriterBag(check_new_bag(v["record"]),
                     run_info(world, v.get("iterations") or 0, v["seed"] or 0, load_scenario(v["scenario"] or None), {},
                              intention=v["intention"]), tapped_topics(namespace=v["namespace"]))
-    folder = bag.prepare(os.path.abspath(os.path.expanduser(v["data_dir"])))
+    folder = bag.prepare(os.path.abspath(v["data_dir"]))
     bag.own.close()  # the launch process sends nothing itself
     return folder

@@ -62,7 +62,7 @@ def options_from_args(a) -> GraphOptions:
     import os
 
     world = {"iterations": a.iterations, "rate": float(a.rate), "action_timeout": float(a.action_timeout),
-             "trace_path": os.path.abspath(os.path.expanduser(a.trace)) if a.trace else ""}
+             "trace_path": os.path.abspath(a.trace) if a.trace else ""}  # '~' expanded by --trace's user_path
     world.update({n: getattr(a, n) for n in a.world_params if getattr(a, n) is not None})
     from homeo_decision.world_api import world_class
 

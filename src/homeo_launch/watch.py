@@ -17,7 +17,7 @@ from pathlib import Path
 from homeo_msgs_py.cli_args import int_at_least, setting, user_path
 from homeo_msgs_py.graph import SEED_MAX, TICKS_MAX
 
-from .launch import PROG
+from .launch import PROG, save_q
 from .options import _namespace_arg
 
 
@@ -55,7 +55,7 @@ def cmd_watch(a) -> int:
             if run.take(mon.status):
                 bar(mon.status.tick, mon.status.fields)
         if a.save_q:
-            ok, msg = mon.call_trigger("homeo_decision/save_q", timeout=10.0)
+            ok, msg = save_q(mon, timeout=10.0)
             if not ok:
                 print(f"{PROG}: warning: the Q-table was not saved: {msg}", file=sys.stderr)
     except KeyboardInterrupt:
@@ -78,14 +78,13 @@ def cmd_watch(a) -> int:
 
 def print_log(status: dict, as_json: bool) -> int:
     """A robot world's result: its interaction log (the run status's ``extra.log``)."""
-    from .pepper import HEADER, row_line
+    from .pepper import print_log_table
 
     log = (status.get("extra") or {}).get("log") or []
     if as_json:
         print(json.dumps({"interactions": len(log), "missed": status.get("missed", 0), "log": log}, indent=1))
     else:
-        print("\n".join([HEADER, *map(row_line, log)]))
-        print(f"{len(log)} interactions, {status.get('missed', 0)} missed")
+        print_log_table(log, status.get("missed", 0))
     return 0
 
 

@@ -330,10 +330,8 @@ class LockstepDriver:
     def position(self) -> dict:
         """Where the run stands, as JSON-able data (the world's checkpoint): ``outcome`` is the last
         one sent, ``[tick, fields]``, which a restart at the next tick sends again."""
-        running = self.state in (RUNNING, FINISHING)
         return {"run": self.run, "tick": self.tick, "missed": self.missed, "iterations": self.iterations,
-                "done": self.state == DONE, "started": self.state != WAITING,
-                "elapsed": self.clock() - self._t_begin if running else self.elapsed,
+                "done": self.state == DONE, "started": self.state != WAITING, "elapsed": self.run_time(),
                 "outcome": list(self._outcome) if self._outcome is not None else None}
 
     def rejoin(self, run: int, tick: int, missed: int, elapsed: float = 0.0, outcome: tuple | None = None,
@@ -364,13 +362,16 @@ class LockstepDriver:
         self.rate = rate
         self._t0, self._t0_tick = self.clock(), self.tick
 
+    def run_time(self) -> float:
+        """Seconds of the run so far: still counting while it runs, fixed once it ended."""
+        return self.clock() - self._t_begin if self.state in (RUNNING, FINISHING) else self.elapsed
+
     def status_fields(self) -> dict:
         fields = {"iterations": self.iterations, "done": self.state == DONE, "missed": self.missed,
                   "state": self.state}
         fields.update(self.side.status(self.state == DONE))
         if self.state in (RUNNING, FINISHING, DONE):  # the run's own time: an interrupted run is timed by it too
-            elapsed = self.elapsed if self.state == DONE else self.clock() - self._t_begin
-            fields["extra"] = dict(fields.get("extra") or {}, elapsed_s=elapsed, ticks=self.tick)
+            fields["extra"] = dict(fields.get("extra") or {}, elapsed_s=self.run_time(), ticks=self.tick)
         return fields
 
 

@@ -37,6 +37,7 @@ MAX_DEPTH = 8  # nesting of objects and arrays
 MAX_STR = 1024  # characters of one string or key
 MAX_ITEMS = 4096  # values in one message
 MAX_INT_DIGITS = 18  # |n| < 10**18: the ticks and runs of centuries of running
+_INT_LIMIT = 10 ** MAX_INT_DIGITS  # computed once: every number of every message is compared with it
 MAX_REASON = 200  # characters of a reason kept for /diagnostics and the log
 
 
@@ -82,7 +83,7 @@ def _num(lo: float, hi: float) -> Check:
     def check(v, voc, where):
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             raise Rejected(f"{where} must be a number, got {type(v).__name__}")
-        if isinstance(v, int) and abs(v) >= 10 ** MAX_INT_DIGITS:  # float() of it could overflow
+        if isinstance(v, int) and abs(v) >= _INT_LIMIT:  # float() of it could overflow
             raise Rejected(f"{where}: an integer of more than {MAX_INT_DIGITS} digits")
         if not math.isfinite(v) or not lo <= v <= hi:
             raise Rejected(f"{where} = {v} is outside [{lo:g}, {hi:g}]")
@@ -445,9 +446,6 @@ def short(text: str, limit: int = MAX_REASON) -> str:
 
 def _parse_constant(name: str):
     raise Rejected(f"{name} is not JSON (use null)")
-
-
-_INT_LIMIT = 10 ** MAX_INT_DIGITS
 
 
 def _check_tree(value: Any, text: str) -> None:

@@ -273,6 +273,7 @@ def cmd_sweep(args) -> int:
 
 def cmd_report(args) -> int:
     from .report import build_report
+    from .report.fidelity import format_goals
 
     base = RunConfig(iterations=args.iterations, scenario=args.scenario, overrides=tuple(args.set))
     build_scenario(base)
@@ -287,7 +288,7 @@ def cmd_report(args) -> int:
     print(f"fidelity: {data['fidelity']['summary']}")
     goals = data["fidelity"].get("goals")
     if goals:  # issue 25's targets (homeo_sim.report.fidelity.GOALS)
-        print("goals: " + ", ".join(f"{k.replace('_', ' ')} {'met' if ok else 'not met'}" for k, ok in goals.items()))
+        print("goals: " + format_goals(goals))
     return 0
 
 

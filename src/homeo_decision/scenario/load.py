@@ -219,11 +219,7 @@ def _scenario_from_dict(raw: Any, source: str, overrides: Mapping[str, Any] | No
                 raise ScenarioError(f"{where}: {ectx} may only have 'when', 'set' and 'drives'")
             check_cond(e.get("when", {}), ectx + ".when")
             check_set(e.get("set", {}), ectx + ".set")
-            for dn, dv in e.get("drives", {}).items():
-                if dn not in dnames:
-                    raise ScenarioError(f"{where}: {ectx} changes unknown drive {dn!r}")
-                if not isinstance(dv, (int, float)) or isinstance(dv, bool):
-                    raise ScenarioError(f"{where}: {ectx}.drives.{dn} must be a number")
+            _check_drives(e.get("drives", {}), dnames, ectx, where)
         actions.append(ActionSpec(name, obj, dict(req), tuple(effects)))
     _unique([a.name for a in actions], "action", where)
     anames = {a.name for a in actions}
@@ -296,13 +292,18 @@ def _parse_ongoing(block: Any, dnames: list, check_cond, where: str) -> tuple:
         check_cond(og["when"], ctx + ".when")
         if not isinstance(og["drives"], dict) or not og["drives"]:
             raise ScenarioError(f"{where}: {ctx}.drives must be a non-empty object of drive: change")
-        for dn, dv in og["drives"].items():
-            if dn not in dnames:
-                raise ScenarioError(f"{where}: {ctx} changes unknown drive {dn!r}")
-            if not isinstance(dv, (int, float)) or isinstance(dv, bool):
-                raise ScenarioError(f"{where}: {ctx}.drives.{dn} must be a number")
+        _check_drives(og["drives"], dnames, ctx, where)
         out.append({"name": str(og.get("name", f"ongoing{i}")), "when": dict(og["when"]), "drives": dict(og["drives"])})
     return tuple(out)
+
+
+def _check_drives(changes: Mapping, dnames: list, ctx: str, where: str) -> None:
+    """``{drive: change}`` of an action's effect or an ongoing effect: known drives, numeric changes."""
+    for dn, dv in changes.items():
+        if dn not in dnames:
+            raise ScenarioError(f"{where}: {ctx} changes unknown drive {dn!r}")
+        if not isinstance(dv, (int, float)) or isinstance(dv, bool):
+            raise ScenarioError(f"{where}: {ctx}.drives.{dn} must be a number")
 
 
 def _unique(names: Sequence, what: str, where: str) -> None:

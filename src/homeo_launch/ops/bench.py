@@ -94,10 +94,9 @@ def timed_run(o: GraphOptions, sinks=(), sampler=None) -> dict:
     return out
 
 
-def recorded_run(iterations: int, record_from: str = "writers", **kw) -> dict:
+def recorded_run(iterations: int, record_from: str = "writers") -> dict:
     """``timed_run`` of the graph recording every topic into a bag (``--record``, ``--record-from``), in a
-    temporary folder; ``close_s``: what closing the bag took after the run (at the writers: the merge).
-    ``kw``: more ``bench_options`` (checkpoints, auth)."""
+    temporary folder; ``close_s``: what closing the bag took after the run (at the writers: the merge)."""
     import tempfile
     from pathlib import Path
 
@@ -109,7 +108,7 @@ def recorded_run(iterations: int, record_from: str = "writers", **kw) -> dict:
     with tempfile.TemporaryDirectory(prefix="homeo-bench-bag-") as tmp:
         sink = new_bag(Path(tmp) / "bag", run_info("sim", iterations, 0, load_scenario(), {}), tapped_topics(),
                        record_from)
-        o = bench_options(iterations, str(Path(tmp) / "data"), **kw)
+        o = bench_options(iterations, str(Path(tmp) / "data"))
         try:
             out = timed_run(o, sinks=[sink])
         finally:
@@ -173,7 +172,7 @@ def cmd_bench(args) -> int:
 
     if args.profile:
         try:
-            profile.Sampler().close()
+            profile.require_pyspy()
         except profile.ProfilerMissing as exc:
             print(f"homeo-launch bench: {exc}", file=sys.stderr)
             return 2

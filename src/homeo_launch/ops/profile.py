@@ -104,14 +104,20 @@ def find_pyspy() -> str | None:
     return str(here) if here.exists() else shutil.which("py-spy")
 
 
+def require_pyspy() -> str:
+    """py-spy's path, or ``ProfilerMissing`` saying how to install it."""
+    exe = find_pyspy()
+    if exe is None:
+        raise ProfilerMissing(f"py-spy is not installed: {INSTALL}")
+    return exe
+
+
 class Sampler:
     """py-spy attached to processes (name -> pid) from ``start`` to ``stop``."""
 
     def __init__(self, rate: int = RATE_HZ, exe: str | None = None):
         self.rate = rate
-        self.exe = exe or find_pyspy()
-        if self.exe is None:
-            raise ProfilerMissing(f"py-spy is not installed: {INSTALL}")
+        self.exe = exe or require_pyspy()
         self._tmp = tempfile.TemporaryDirectory(prefix="homeo-profile-")
         self._procs: dict = {}
 

@@ -21,9 +21,8 @@ from homeo_msgs_py.learning import DOD
 
 from ..runner import RUN_LEARNING, RunConfig
 from ..stats import describe
-from .fidelity import fidelity, seed_sets
-from ..sweep import (LEARN_HSR, LEARN_RSR, LEARNING_WINDOW, SWEEPS, JobResult, median_time, point_config,
-                     summarize_point)
+from .fidelity import fidelity, needed_labels, set_aggregates
+from ..sweep import LEARN_HSR, LEARN_RSR, LEARNING_WINDOW, SWEEPS, JobResult, median_time, point_config
 
 BASELINES = ("random", "rule", "flatq", "nofeedback")  # "rule" only when the scenario has a rule_policy block
 POLICY_LABELS = {"objectq": "Object-Q (thesis)", "random": "random", "rule": "threshold rules",
@@ -135,10 +134,10 @@ def _analyse(sc, base: RunConfig, R: dict, M: dict, seeds: int) -> dict:
     d["checks"] = _checks(sc, M, pols, early, mean, base.iterations)
     # the fidelity score: Table 4.5 against our intervals, and the text's statements about the sweeps
     # against their criteria (both from the scenario's reference block; none without one)
-    # the statements on disjoint sets of SET_SIZE seeds (the runs by position in the seed list)
-    names = sc.drive_names
-    M_sets = [{k: summarize_point([v[i] for i in pos], names) for k, v in R.items()}
-              for pos in seed_sets(range(seeds))]
+    # the statements on disjoint sets of SET_SIZE seeds: only the runs the criteria read are cut into sets
+    criteria = (sc.reference.criteria or ()) if sc.reference is not None else ()
+    M_sets = set_aggregates({k: [r.metrics for r in rs] for k, rs in R.items()}, sc.drive_names,
+                            needed_labels(criteria, SWEEPS))
     d["fidelity"] = fidelity(sc.reference, M, SWEEPS, {DOD_SWEEP: base.dod}, M_sets=M_sets, n_seeds=seeds)
     d["statements"] = d["fidelity"]["statements"]
     return d

@@ -24,6 +24,8 @@ from __future__ import annotations
 
 from typing import Mapping, Sequence
 
+from ..stats import aggregate
+
 HALF_WIDTH_FLOOR = 0.05  # the distance's half-width is at least this fraction of the published value
 SET_SIZE = 20  # the statements are checked on disjoint sets of this many seeds
 # issue 25's targets: the mean absolute relative error, every number's, the headline rates' (HSR, RSR), and
@@ -99,6 +101,17 @@ def seed_sets(seeds: Sequence[int], size: int = SET_SIZE) -> list[list[int]]:
     if len(seeds) < size:
         return [seeds] if seeds else []
     return [seeds[i:i + size] for i in range(0, len(seeds) - size + 1, size)]
+
+
+def set_aggregates(runs: Mapping[str, Sequence[Mapping]], drive_names: Sequence[str],
+                   labels: set[str] | None = None) -> list[dict]:
+    """``M`` per seed set (``seed_sets``), from ``runs``: ``{label: per-seed metrics}``, every label over the
+    same seeds in the same order; only the ``labels`` given (default: all)."""
+    # by position, not by seed: the runs of one label are in seed order, so the sets are the same
+    n_seeds = len(next(iter(runs.values()), ()))
+    kept = {lab: per_seed for lab, per_seed in runs.items() if labels is None or lab in labels}
+    return [{lab: aggregate([per_seed[i] for i in pos], drive_names) for lab, per_seed in kept.items()}
+            for pos in seed_sets(range(n_seeds))]
 
 
 # -- statements about the sweeps -----------------------------------------------------------
@@ -197,13 +210,27 @@ def needed_labels(criteria: Sequence[Mapping], sweeps: Mapping) -> set[str]:
 def statement_shares(criteria: Sequence[Mapping], M_sets: Sequence[Mapping], sweeps: Mapping,
                      base_value: Mapping | None = None) -> dict:
     """Each criterion on every seed set: per set the statements met, per statement the sets it holds on."""
-    per_set = [criteria_score(criteria, M, sweeps, base_value) for M in M_sets]
+    return _shares(criteria, [criteria_score(criteria, M, sweeps, base_value) for M in M_sets])
+
+
+def _shares(criteria: Sequence[Mapping], per_set: Sequence[Sequence[Mapping]]) -> dict:
+    """``statement_shares`` from the ``criteria_score`` rows of each set."""
     shares = []
     for i, c in enumerate(criteria):
         held = [rows[i]["agrees"] for rows in per_set]
         shares.append({"id": c["id"], "held": sum(held), "of": len(held), "per_set": held,
                        "share": sum(held) / len(held) if held else 0.0})
     return {"met_per_set": [sum(r["agrees"] for r in rows) for rows in per_set], "shares": shares}
+
+
+def statements_goal_met(met_per_set: Sequence[int], n_statements: int, goals: Mapping = GOALS) -> bool:
+    """Issue 25's goal for the statements: on every seed set at least that share of them hold (no set: not met)."""
+    return bool(met_per_set) and min(met_per_set) >= goals["statements_per_set"] * n_statements
+
+
+def format_goals(goals: Mapping[str, bool], not_met: str = "not met") -> str:
+    """The goals as ``mean error met, each error not met, ...`` (``not_met``: how a missed goal reads)."""
+    return ", ".join(f"{k.replace('_', ' ')} {'met' if ok else not_met}" for k, ok in goals.items())
 
 
 # -- the whole score -----------------------------------------------------------------------
@@ -220,8 +247,11 @@ def fidelity(reference, M: Mapping, sweeps: Mapping, base_value: Mapping | None 
     for row, e in zip(table, relative_errors(M["base"], reference.metrics)):
         row["error"] = e["error"]
     errors = error_summary(table, goals)
-    crit = criteria_score(reference.criteria or (), M, sweeps, base_value)
-    sets = statement_shares(reference.criteria or (), M_sets if M_sets is not None else [M], sweeps, base_value)
+    criteria = reference.criteria or ()
+    crit = criteria_score(criteria, M, sweeps, base_value)
+    # without seed sets, ``M`` is the one set: its rows are ``crit``, already scored
+    sets = (_shares(criteria, [crit]) if M_sets is None
+            else statement_shares(criteria, M_sets, sweeps, base_value))
     for row, share in zip(crit, sets["shares"]):
         row.update(held=share["held"], of=share["of"], per_set=share["per_set"])
     inside = sum(r["inside"] for r in table)
@@ -242,8 +272,7 @@ def fidelity(reference, M: Mapping, sweeps: Mapping, base_value: Mapping | None 
     if n_st:
         size = len((M_sets or [M])[0]["base"]["HSR"]["per_seed"])
         parts.append(f"statements per {size}-seed set: {', '.join(map(str, per_set))} of {n_st}")
-        out["goals"] = dict(errors.get("goals", {}),
-                            statements_per_set=bool(per_set) and min(per_set) >= goals["statements_per_set"] * n_st)
+        out["goals"] = dict(errors.get("goals", {}), statements_per_set=statements_goal_met(per_set, n_st, goals))
     else:
         out["goals"] = dict(errors.get("goals", {}))
     out["summary"] = "; ".join(parts) if parts else "no published numbers or statements"

@@ -10,6 +10,7 @@ from homeo_msgs_py.learning import DOD, XI
 from ..runner import RunConfig
 from ..sweep import LEARN_HSR, LEARN_RSR, LEARNING_WINDOW
 from .analysis import BASELINES, POLICY_LABELS, _fmt, _t
+from .fidelity import format_goals
 
 def _markdown(sc, base: RunConfig, M: dict, d: dict, seeds: int) -> str:
     names = sc.drive_names
@@ -57,8 +58,7 @@ def _markdown(sc, base: RunConfig, M: dict, d: dict, seeds: int) -> str:
           f"in half-widths of it, at least {100 * fid['half_width_floor']:g}% of the published value.)\n")
         goals = fid.get("goals", {})
         if goals:
-            w("Goals (issue 25): " + ", ".join(f"{k.replace('_', ' ')} {'met' if ok else '**not met**'}"
-                                              for k, ok in goals.items()) + ".\n")
+            w("Goals (issue 25): " + format_goals(goals, "**not met**") + ".\n")
         w("| metric | ours: mean [95% interval] | thesis | error | inside | distance (half-widths) |\n"
           "|---|---|---|---|---|---|")
         for r in fid["table"]:
