@@ -14,13 +14,16 @@ from homeo_launch.processes import dds_defaults
 
 os.environ.update(dds_defaults())  # before any rclpy context of the test process
 
-# domain ids 0..232 are valid; the tests take 100..229. Each pytest-xdist worker (``make test`` runs
-# two) has a share of its own, so two tests running at once never meet on one domain; a plain pytest
-# session spreads its start by pid, for two sessions side by side.
+# domain ids 0..232 are valid; the tests take 100..229, or the range HOMEO_TEST_DOMAINS=LO-HI names
+# (two checkouts testing side by side on one machine, each in its own range). Each pytest-xdist worker
+# (``make test`` runs two) has a share of its own, so two tests running at once never meet on one
+# domain; a plain pytest session spreads its start by pid, for two sessions side by side.
+_LO, _HI = (int(x) for x in os.environ.get("HOMEO_TEST_DOMAINS", "100-229").split("-"))
 _WORKER = os.environ.get("PYTEST_XDIST_WORKER", "")
 _WORKERS = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1") or 1)
-_SPAN = 130 // max(_WORKERS, 1)
-_START = 100 + int(_WORKER[2:]) * _SPAN if _WORKER[2:].isdigit() else 100 + (os.getpid() % 40) * 3
+_SPAN = (_HI - _LO + 1) // max(_WORKERS, 1)
+_START = (_LO + int(_WORKER[2:]) * _SPAN if _WORKER[2:].isdigit()
+          else _LO + (os.getpid() * 3) % (_HI - _LO + 1))
 _DOMAINS = itertools.count(0)
 
 
@@ -28,7 +31,7 @@ def fresh_domain() -> int:
     d = next(_DOMAINS)
     if _WORKER:
         return _START + d % _SPAN
-    return 100 + (_START - 100 + d) % 130
+    return _LO + (_START - _LO + d) % (_HI - _LO + 1)
 
 
 class Probe:
