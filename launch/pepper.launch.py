@@ -1,5 +1,5 @@
-"""``ros2 launch homeo_robot pepper.launch.py [name:=value ...]``: the node graph with the Pepper world (a robot, or standin:=true), as
-``homeo-launch pepper`` starts it (``homeo_launch.ros_launch``; ``ros2 launch homeo_robot pepper.launch.py --show-args``
+"""``ros2 launch homeo_robot pepper.launch.py [name:=value ...]``: a shortcut for ``world.launch.py world:=pepper``, the
+node graph with the Pepper world (a robot, or standin:=true), as ``homeo-launch pepper`` starts it (``--show-args``
 lists the arguments)."""
 
 from homeo_launch.ros_launch import launch_description

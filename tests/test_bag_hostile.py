@@ -9,13 +9,13 @@ import sys
 
 import pytest
 
-from homeo_launch.bag import BagError, load_run
-from homeo_launch.record import RUN_INFO_KEY, BagSink, run_info
-from homeo_launch.tap import tapped_topics
+from homeo_record.bag import BagError, load_run
+from homeo_record.record import RUN_INFO_KEY, BagSink, run_info
+from homeo_record.tap import tapped_topics
 
 
 def _replay(*args):
-    return subprocess.run([sys.executable, "-m", "homeo_launch.replay", *map(str, args)], capture_output=True,
+    return subprocess.run([sys.executable, "-m", "homeo_record.replay", *map(str, args)], capture_output=True,
                           text=True, timeout=60)
 
 

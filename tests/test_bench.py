@@ -11,7 +11,7 @@ import sys
 
 import pytest
 
-from homeo_launch.ops import bench, profile
+from homeo_ops import bench, profile
 
 MAIN = "thread (100): MainThread;_run_module_as_main (<frozen runpy>:198);run_node (homeo_msgs_py/node_base.py:378)"
 SPIN = MAIN + ";SingleThreadedExecutor.spin_once (rclpy/executors.py:839)"

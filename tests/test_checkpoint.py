@@ -226,7 +226,7 @@ def test_a_drives_node_restored_mid_run_from_its_slots_perceives_exactly_as_the_
     from homeo_msgs_py.lockstep import DONE, LockstepDriver
     from homeo_sim.world_backend import SimWorld
 
-    from homeo_launch.bus import Bus, graph_readers, robot_hosts
+    from homeo_ops.bus import Bus, graph_readers, robot_hosts
 
     def run(replace_at=None):
         from homeo_decision.codec import vocabulary

@@ -189,7 +189,7 @@ def test_no_pseudo_is_pseudo_update_false():
 @FAST
 @given(flag=st.sampled_from(["--dod", "--xi"]), text=st.text(max_size=24))
 def test_homeo_replay_policy_flags_take_what_the_declaration_takes(flag, text):
-    from homeo_launch.replay import build_parser
+    from homeo_record.replay import build_parser
     from homeo_msgs_py.learning import learning_values
 
     spec = {s.flag: s for s in LEARNING}[flag]
@@ -202,7 +202,7 @@ def test_homeo_replay_policy_flags_take_what_the_declaration_takes(flag, text):
 
 
 def test_a_learning_flag_without_policy_is_refused():
-    from homeo_launch.replay import main
+    from homeo_record.replay import main
 
     assert main(["nowhere", "--xi", "2"]) == 2
 

@@ -37,7 +37,7 @@ JSON = st.recursive(SCALARS, lambda inner: st.lists(inner, max_size=4)
 
 def _sample_messages(sc) -> dict[str, list[str]]:
     """Real messages of each topic from a short run of the graph's logic (the bus of test_graph_stages)."""
-    from homeo_launch.bus import Bus, graph_readers, robot_hosts
+    from homeo_ops.bus import Bus, graph_readers, robot_hosts
 
     bus = Bus(vocabulary(sc), 0)
     side = SimWorld(sc, {"seed": 1, "intention_learns": True})

@@ -293,23 +293,23 @@ def test_a_graph_that_cannot_start_is_a_clear_error(tmp_path):
 # -- homeo-topic ----------------------------------------------------------------------------------------
 def test_homeo_topic_echo_list_pub_param_and_call():
     d = fresh_domain()
-    r = _cli("homeo_launch.topic_cli", "pub", "/homeo/action", '{"action": "Dance"}', domain=d, timeout=60)
+    r = _cli("homeo_topic.cli", "pub", "/homeo/action", '{"action": "Dance"}', domain=d, timeout=60)
     assert r.returncode == 2 and "unknown action 'Dance'" in r.stderr and "Traceback" not in r.stderr
     with sim_graph(sim_opts(iterations=0, rate=20.0), d):
         _wait_running(d)
-        r = _cli("homeo_launch.topic_cli", "echo", "/homeo/drives", "--count", "1", "--timeout", "30", domain=d)
+        r = _cli("homeo_topic.cli", "echo", "/homeo/drives", "--count", "1", "--timeout", "30", domain=d)
         assert r.returncode == 0, r.stderr
         msg = json.loads(r.stdout)
         assert msg["schema"] == "homeo/drives" and msg["m_dom"] in ("Serving", "Social", "Relaxative", "Survival")
-        r = _cli("homeo_launch.topic_cli", "list", "--wait", "8", domain=d)
+        r = _cli("homeo_topic.cli", "list", "--wait", "8", domain=d)
         assert r.returncode == 0 and "homeo_decision" in r.stdout and "/homeo/outcome" in r.stdout
-        r = _cli("homeo_launch.topic_cli", "param", "/homeo_decision", "dod", "0.3", domain=d)
+        r = _cli("homeo_topic.cli", "param", "/homeo_decision", "dod", "0.3", domain=d)
         assert r.returncode == 0, r.stderr
-        r = _cli("homeo_launch.topic_cli", "param", "/homeo_decision", "dod", domain=d)
+        r = _cli("homeo_topic.cli", "param", "/homeo_decision", "dod", domain=d)
         assert r.returncode == 0 and json.loads(r.stdout) == 0.3
-        r = _cli("homeo_launch.topic_cli", "param", "/homeo_decision", "dod", "7", domain=d)
+        r = _cli("homeo_topic.cli", "param", "/homeo_decision", "dod", "7", domain=d)
         assert r.returncode == 2 and "refused" in r.stderr
-        r = _cli("homeo_launch.topic_cli", "call", "/homeo_decision/save_q", domain=d)
+        r = _cli("homeo_topic.cli", "call", "/homeo_decision/save_q", domain=d)
         assert r.returncode == 1 and "q_table_path is not set" in r.stdout
-        r = _cli("homeo_launch.topic_cli", "pub", "/homeo/observation", '{"intention": "come", "tick": 0}', domain=d)
+        r = _cli("homeo_topic.cli", "pub", "/homeo/observation", '{"intention": "come", "tick": 0}', domain=d)
         assert r.returncode == 0, r.stderr

@@ -15,7 +15,7 @@ from homeo_decision.agent import DecisionCore
 from homeo_decision.codec import vocabulary
 from homeo_decision.hosts import DecisionHost, PerceptionHost
 from homeo_intention.recognition import RecognitionHost
-from homeo_launch.bus import Bus, BusGraph, graph_readers, robot_hosts
+from homeo_ops.bus import Bus, BusGraph, graph_readers, robot_hosts
 from homeo_msgs_py.graph import BAYES, NODES, ORACLE
 from homeo_msgs_py.lockstep import DONE, LockstepDriver
 from homeo_sim.runner import RunConfig, run_episode
@@ -23,7 +23,7 @@ from homeo_sim.world_backend import SimWorld
 
 
 def run_bus_graph(sc, seed: int, iterations: int, shuffle_seed: int = 0, mode: str = ORACLE):
-    """The graph of ``homeo_msgs_py.graph`` on the in-memory bus (``homeo_launch.bus``), shuffled."""
+    """The graph of ``homeo_msgs_py.graph`` on the in-memory bus (``homeo_ops.bus``), shuffled."""
     world = SimWorld(sc, {"seed": seed, "intention_learns": mode == BAYES})
     g = BusGraph(world, iterations, mode=mode, seed=seed, shuffle=shuffle_seed)
     g.run()

@@ -21,16 +21,19 @@ def _launch(*args, cwd=None):
 
 
 @pytest.mark.parametrize("args, words", [
-    (("sim", "--seed", 2**31), ["--seed", "above the maximum 2147483647"]),
-    (("sim", "--iterations", 10**10), ["--iterations", "above the maximum"]),
-    (("sim", "--seed", "9" * 5000), ["--seed", "is not an integer"]),
+    (("sim", "--seed", 2**31), ["--seed", "outside [0, 2147483647]"]),  # the node's own range (WORLD_PARAMS)
+    (("sim", "--iterations", 10**10), ["--iterations", "outside [0, 1000000000]"]),
+    (("sim", "--seed", "9" * 5000), ["--seed", "must be an integer"]),
     (("sim", "--namespace", "1r"), ["not a ROS name"]),
     (("sim", "--namespace", "r/../x"), ["not a ROS name"]),
     (("sim", "--load-q", "/etc/hostname"), ["/etc/hostname", "not JSON"]),
     (("sim", "--trace", "/proc/x/t.jsonl"), ["--trace", "/proc/x"]),
     (("sim", "--log-dir", "/proc/nope"), ["--log-dir"]),
     (("pepper", "--standin", "--q-table", "/etc/hostname"), ["/etc/hostname", "not JSON"]),
-    (("pepper", "--standin", "--seed", -1), ["below the minimum 0"]),
+    (("pepper", "--standin", "--seed", -1), ["outside [0, 2147483647]"]),
+    (("pepper", "--standin", "--qi-url", "tcp://127.0.0.1:9"), ["qi_url and standin"]),
+    (("pepper", "--script", "field_user.json"), ["script needs standin"]),
+    (("day", "--day", "/"), ["day script", "/"]),
 ])
 def test_a_bad_option_is_one_line_and_exit_2(tmp_path, args, words):
     p, _ = _launch(*args, cwd=tmp_path)
@@ -71,9 +74,9 @@ def test_data_dir_resolution(tmp_path):
 
 
 def _launch_values(**given) -> dict:
-    from homeo_launch.ros_launch import COMMON, WORLD_ARGS, values
+    from homeo_launch.ros_launch import COMMON, values, world_args
 
-    return values({**{n: d for n, d, _ in COMMON + WORLD_ARGS["sim"]}, **given}, "sim")
+    return values({**{n: d for n, d, _ in COMMON}, **{n: "" for n in world_args("sim")}, **given}, "sim")
 
 
 @pytest.mark.parametrize("given, ns", [("", ""), ("r1", "/r1"), ("/r1/", "/r1"), ("r1/a", "/r1/a")])
@@ -81,12 +84,14 @@ def test_ros2_launch_namespace_is_the_nodes_own_in_the_recording_too(tmp_path, g
     """``ros2 launch homeo_robot sim.launch.py namespace:=r1 record:=BAG``: the nodes publish under /r1, and
     the recorder keeps the topics its manifest names, so the manifest must name /r1/homeo/..., not
     r1/homeo/... (a bag of /diagnostics alone, as it was)."""
-    from homeo_launch.record import read_manifest
+    from homeo_record.record import read_manifest
     from homeo_launch.ros_launch import _recording
 
     v = _launch_values(namespace=given, record=str(tmp_path / "bag"), data_dir=str(tmp_path))
     assert v["namespace"] == ns
-    _bag, _launcher, _settings, topics = read_manifest(Path(_recording(v, "sim")))
+    from homeo_decision.scenario import load_scenario
+
+    _bag, _launcher, _settings, topics = read_manifest(Path(_recording(v, "sim", load_scenario(), None)))
     names = [t.name for t in topics if t.name != "/diagnostics"]
     assert names and all(n.startswith(f"{ns}/homeo/") for n in names), names
 

@@ -9,15 +9,20 @@ from pathlib import Path
 import pytest
 
 SRC = Path(__file__).resolve().parents[1] / "src"
-PACKAGES = ("homeo_msgs_py", "homeo_decision", "homeo_intention", "homeo_sim", "pepper_bridge", "homeo_launch")
-# what each package may import besides itself (docs/ARCHITECTURE.md)
+CORE = ("homeo_msgs_py", "homeo_decision", "homeo_intention", "homeo_sim", "pepper_bridge")  # layers 1-4
+FRONT_ENDS = ("homeo_record", "homeo_launch", "homeo_ops", "homeo_topic")  # layer 5: products of their own
+PACKAGES = CORE + FRONT_ENDS
+# what each package may import besides itself (docs/ARCHITECTURE.md; each package's docstring says it too)
 ALLOWED = {
     "homeo_msgs_py": set(),
     "homeo_decision": {"homeo_msgs_py"},
     "homeo_intention": {"homeo_msgs_py", "homeo_decision"},
     "homeo_sim": {"homeo_msgs_py", "homeo_decision", "homeo_intention"},
     "pepper_bridge": {"homeo_msgs_py", "homeo_decision", "homeo_intention"},
-    "homeo_launch": set(PACKAGES) - {"homeo_launch"},
+    "homeo_record": set(CORE),
+    "homeo_launch": set(CORE) | {"homeo_record"},
+    "homeo_ops": set(PACKAGES) - {"homeo_ops", "homeo_topic"},
+    "homeo_topic": {"homeo_msgs_py", "homeo_decision"},
 }
 
 
@@ -73,19 +78,31 @@ def test_each_package_imports_only_the_layers_below_it(pkg):
     assert not bad, "\n".join(sorted(bad))
 
 
-def test_nothing_imports_the_bringup_package():
-    bad = [f"{m} imports {d}" for m, deps in _graph().items() if not m.startswith("homeo_launch")
-           for d in deps if d.startswith("homeo_launch")]
-    assert not bad
-
-
-def test_the_launcher_does_not_import_the_operations_tools():
-    """The operations tools (``homeo_launch.ops``: bench, soak, floor chain, recover) sit apart:
-    only the command line (``homeo_launch.cli``) and they themselves import them."""
-    bad = [f"{m} imports {d}" for m, deps in _graph().items()
-           if m.startswith("homeo_launch") and not m.startswith("homeo_launch.ops") and m != "homeo_launch.cli"
-           for d in deps if d.startswith("homeo_launch.ops")]
+def test_only_the_operations_tools_import_the_launcher_and_nothing_imports_them():
+    """The launcher finds the operations tools' commands through entry points (``homeo_robot.commands``),
+    so the tools import it and not the other way round; the package docstrings say what each may import."""
+    g = _graph()
+    bad = [f"{m} imports {d}" for m, deps in g.items() for d in deps
+           if (d.startswith("homeo_launch") and m.split(".")[0] not in ("homeo_launch", "homeo_ops"))
+           or (d.startswith("homeo_ops") and not m.startswith("homeo_ops"))]
     assert not bad, "\n".join(bad)
+    for pkg in FRONT_ENDS:
+        assert "import" in __import__(pkg).__doc__, pkg
+
+
+def test_no_front_end_names_a_robot():
+    """The launcher and the other front ends know no world by name (issue 28): a world's command, launch
+    arguments, progress and result come from its declarations; what is left is the default world ``sim``."""
+    import re
+
+    hits = [f"{f.relative_to(SRC)}:{i}" for pkg in FRONT_ENDS for f in sorted((SRC / pkg).rglob("*.py"))
+            for i, line in enumerate(f.read_text().splitlines(), 1) if re.search(r"pepper|\bday\b|naoqi", line, re.I)]
+    assert not hits, hits
+
+
+def test_the_launcher_is_small():
+    lines = sum(len(f.read_text().splitlines()) for f in (SRC / "homeo_launch").rglob("*.py"))
+    assert lines <= 2500, lines
 
 
 def _calls(name: str) -> list[str]:
@@ -103,7 +120,7 @@ def test_one_world_host_builds_the_lockstep_driver():
     """Every world runs on one host (issue 22): the lockstep driver is built in the world host alone,
     which the world node and the in-memory bus runner share."""
     assert _calls("LockstepDriver") == ["homeo_decision/world_host.py"]
-    assert sorted(_calls("WorldHost")) == ["homeo_decision/world_node.py", "homeo_launch/bus.py"]
+    assert sorted(_calls("WorldHost")) == ["homeo_decision/world_node.py", "homeo_ops/bus.py"]
 
 
 def test_the_module_import_graph_has_no_cycle():

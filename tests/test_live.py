@@ -193,10 +193,10 @@ def test_foxglove_option_is_checked():
 def test_the_layout_in_docs_is_current_and_plots_what_the_schemas_offer(thesis):
     from pathlib import Path
 
-    from homeo_launch.foxglove_layout import layout
+    from homeo_record.foxglove_layout import layout
 
     doc = json.loads((Path(__file__).parents[1] / "docs" / "foxglove-layout.json").read_text())
-    assert doc == layout(thesis)  # regenerate: python -m homeo_launch.foxglove_layout > docs/foxglove-layout.json
+    assert doc == layout(thesis)  # regenerate: python -m homeo_record.foxglove_layout > docs/foxglove-layout.json
     voc = codec.vocabulary(thesis)
     for panel in doc["configById"].values():
         for p in panel.get("paths", []):
@@ -217,7 +217,7 @@ def test_foxglove_publish_plays_the_human_and_the_bag_keeps_it(tmp_path):
     which waits for the person's first word, starts, and the bag records the input and its effect."""
     from rosgraph import fresh_domain
 
-    from homeo_launch.bag import load_run
+    from homeo_record.bag import load_run
     from homeo_launch.processes import graph_env
 
     port, bag = _free_port(), tmp_path / "bag"

@@ -295,7 +295,7 @@ def pepper_host(thesis):
 @FAST
 @given(path=st.text(max_size=30) | st.sampled_from(["", ".", "/", "/proc/x/y", "no/such/dir/f.json", "ok.json"]))
 def test_the_soak_samples_file_is_writable_or_a_one_line_refusal(tmp_path, path):
-    from homeo_launch.ops.soak import check_samples_file
+    from homeo_ops.soak import check_samples_file
     from homeo_msgs_py.cli_args import UserError
 
     full = os.path.join(str(tmp_path), path) if path and not path.startswith("/") else path
@@ -476,7 +476,7 @@ def test_homeo_topic_number_options_are_in_range_or_one_line(cmd, value):
     which would reach rclpy's Duration."""
     import math
 
-    from homeo_launch.topic_cli import build_parser
+    from homeo_topic.cli import build_parser
     from homeo_msgs_py.cli_args import UserError
 
     sub, opt = cmd

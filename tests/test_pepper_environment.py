@@ -194,12 +194,12 @@ def test_failed_move_is_no_effect(world, thesis, how, reason):
     assert out.action is None and reason in out.failure
     assert env.last_row["ok"] is False and env.last_row["action"] == "MoveToH" and reason in env.last_row["reason"]
     assert view(sc, env.observe())["robot.location"] == "R"  # the robot did not move
-    from homeo_launch.pepper import done_note, row_line  # the printed table says so
+    from pepper_bridge.launch_support import done_note, row_line  # the printed table says so
 
     row = dict(env.last_row, m_dom="NEng", intention="come")
     assert done_note(row).startswith("FAILED: ") and reason in done_note(row)
     assert row_line(row).split()[3:4] == ["MoveToH"] and "FAILED" in row_line(row)
-    from homeo_launch.field import FieldResult, format_table
+    from pepper_bridge.field import FieldResult, format_table
 
     table = format_table(FieldResult("robot", 0.25, 0, log=[row], user_log=[]))
     assert any("MoveToH" in ln and ln.endswith("FAILED") for ln in table)

@@ -12,7 +12,7 @@ import pytest
 
 qi = pytest.importorskip("qi")
 
-from homeo_launch import field  # noqa: E402
+from pepper_bridge import field  # noqa: E402
 from pepper_bridge.user import load_script  # noqa: E402
 
 pytestmark = pytest.mark.qi

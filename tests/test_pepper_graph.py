@@ -29,9 +29,7 @@ START_S = 60.0
 ROBOT = "homeo_world: robot"
 NRES = {0: 0.0, 1: 50.0, 2: 80.0, 3: 100.0}  # Table 4.6
 
-LAUNCH = ("import sys; from homeo_msgs_py.cli_args import Parser; from homeo_launch.pepper import add_parser, cmd_pepper;"
-          "ap = Parser(prog='homeo-launch'); sub = ap.add_subparsers(dest='cmd', required=True); add_parser(sub);"
-          "sys.exit(cmd_pepper(ap.parse_args(sys.argv[1:])))")
+LAUNCH = "import sys; from homeo_launch.cli import main; sys.exit(main(sys.argv[1:]))"  # homeo-launch
 
 
 def test_launcher_runs_the_bridge_graph_on_the_standin_and_prints_the_interaction_log(tmp_path):
@@ -260,15 +258,19 @@ def test_robot_dropping_and_coming_back_is_survived(live):
 
 
 def test_field_test_through_the_graph_matches_the_in_process_driver(tmp_path):
-    """Both robots of the field test, run through the node graph, give homeo-pepper-field's log row for row."""
-    from homeo_launch.field import run_field, train_q
+    """Both robots of the field test, run through the node graph (``homeo-pepper-field --graph``: the generic
+    front end, ``homeo-launch pepper --standin ...``), give the in-process field test's log row for row."""
+    import os
+
+    from pepper_bridge.field import run_field, train_q
 
     q = {"dedicated": str(train_q(tmp_path / "qd.json", 0.25)), "selfish": str(train_q(tmp_path / "qs.json", 0.0))}
-    r = subprocess.run([sys.executable, "-c", LAUNCH, "pepper", "--field", "--script", "field_user.json", "--seed", "0",
-                        "--q-dedicated", q["dedicated"], "--q-selfish", q["selfish"], "--json", "--data-dir", str(tmp_path)],
-                       env=graph_env(fresh_domain()), capture_output=True, text=True, timeout=150)
+    env = dict(graph_env(fresh_domain()), HOMEO_DATA_DIR=str(tmp_path))
+    r = subprocess.run([sys.executable, "-m", "pepper_bridge.field", "--graph", "--script", "field_user.json", "--seeds",
+                        "0", "--q-dedicated", q["dedicated"], "--q-selfish", q["selfish"], "--json"],
+                       env=env, capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert r.returncode == 0, r.stderr[-2000:]
-    robots = json.loads(r.stdout)["robots"]
+    robots = json.loads(r.stdout)[0]["robots"]
     cols = ("m_dom", "intention", "action", "feedback", "proposal")
     for got, (label, dod) in zip(robots, (("dedicated", 0.25), ("selfish", 0.0))):
         ref = run_field("field_user.json", dod, 0, q[label], label=label)
@@ -278,6 +280,7 @@ def test_field_test_through_the_graph_matches_the_in_process_driver(tmp_path):
     # 15's third-stage block this session ties, 12 to 12): tests/test_pepper_field.py compares the two over
     # Q-tables of three training seeds and three sessions each
     assert [x["summary"]["label"] for x in robots] == ["dedicated", "selfish"]
+    assert os.path.isdir(tmp_path / "checkpoints")  # the graph's files went where the user asked
 
 
 @pytest.mark.slow

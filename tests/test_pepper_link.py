@@ -172,7 +172,7 @@ def test_probe_names_an_unknown_host_without_asking_a_name_server(monkeypatch):
         raise socket.gaierror(socket.EAI_NONAME, "Name or service not known")
 
     monkeypatch.setattr(socket, "getaddrinfo", no_such_host)
-    with pytest.raises(launcher.UserError, match="unknown host 'pepper.invalid'"):
+    with pytest.raises(launcher.WorldConfigError, match="unknown host 'pepper.invalid'"):
         launcher.probe_robot("tcp://pepper.invalid:9559", 3.0)
 
 

@@ -100,11 +100,11 @@ def test_the_bag_holds_every_topic_one_message_per_tick_as_cdr_std_msgs_string(r
 
 
 def test_replay_json_is_exactly_the_runs_json_and_the_curves_end_at_its_metrics(recorded):
-    from homeo_launch.bag import load_run
-    from homeo_launch.replay import series
+    from homeo_record.bag import load_run
+    from homeo_record.replay import series
 
     bag, printed, _ = recorded
-    r = _run("homeo_launch.replay", bag, "--json")
+    r = _run("homeo_record.replay", bag, "--json")
     assert r.returncode == 0, r.stderr
     assert r.stdout == printed  # byte for byte
     m = json.loads(printed)["metrics"]
@@ -118,7 +118,7 @@ def test_replay_json_is_exactly_the_runs_json_and_the_curves_end_at_its_metrics(
 
 def test_replay_text_log_and_plots(recorded, tmp_path):
     bag, _, _ = recorded
-    r = _run("homeo_launch.replay", bag, "--log", "--plots", tmp_path / "figs")
+    r = _run("homeo_record.replay", bag, "--log", "--plots", tmp_path / "figs")
     assert r.returncode == 0, r.stderr
     assert "HSR" in r.stdout and "interaction: 60 ticks" in r.stdout
     assert sum(1 for line in r.stdout.splitlines() if " -> " in line) == TICKS
@@ -129,13 +129,13 @@ def test_replay_text_log_and_plots(recorded, tmp_path):
 def test_policy_scores_a_table_on_the_recorded_choices(recorded, tmp_path):
     from homeo_decision.objectq import ObjectQ
     from homeo_decision.qtable_io import save
-    from homeo_launch.bag import load_run
+    from homeo_record.bag import load_run
 
     bag, _, d = recorded
     run = load_run(bag)
     uniform = tmp_path / "uniform.json"
     save(ObjectQ(run.sc), uniform)
-    r = _run("homeo_launch.replay", bag, "--policy", uniform, "--json")
+    r = _run("homeo_record.replay", bag, "--policy", uniform, "--json")
     assert r.returncode == 0, r.stderr
     res = json.loads(r.stdout)
     # a table of equal values: every valid action equally likely, so the robot's choice has 1/|valid|
@@ -145,7 +145,7 @@ def test_policy_scores_a_table_on_the_recorded_choices(recorded, tmp_path):
            for k, f in sorted(run.by_tick("drives").items()) if run.by_tick("action")[k]["action"] is not None]
     assert res["ticks"] == len(inv)
     assert res["p_robot_choice"] == pytest.approx(sum(inv) / len(inv))
-    learned = json.loads(_run("homeo_launch.replay", bag, "--policy", d / "q.json", "--json", "--dod", "0.25").stdout)
+    learned = json.loads(_run("homeo_record.replay", bag, "--policy", d / "q.json", "--json", "--dod", "0.25").stdout)
     assert 0 <= learned["agreement"] <= 1 and learned["rewarded_ticks"] > TICKS // 2
     assert learned["p_robot_choice"] > res["p_robot_choice"]  # the table the robot learned favours its own choices
 
@@ -157,7 +157,7 @@ def test_policy_scores_a_table_on_the_recorded_choices(recorded, tmp_path):
 ])
 def test_replay_user_mistakes_are_one_line_errors(recorded, args, words):
     bag, _, _ = recorded
-    r = _run("homeo_launch.replay", bag, *args)
+    r = _run("homeo_record.replay", bag, *args)
     assert r.returncode == 2 and "Traceback" not in r.stderr
     assert len(r.stderr.splitlines()) == 1 and words in r.stderr, r.stderr
 

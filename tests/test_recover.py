@@ -19,9 +19,9 @@ import yaml
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
-from homeo_launch import record
-from homeo_launch.ops.recover import NotRecovered, recover_folder
-from homeo_launch.tap import tapped_topics
+from homeo_record import record
+from homeo_ops.recover import NotRecovered, recover_folder
+from homeo_record.tap import tapped_topics
 from homeo_msgs_py.spool import CDR, TEXT, SpoolWriter
 
 
@@ -196,7 +196,7 @@ def test_a_launcher_killed_outright_leaves_a_folder_that_recover_turns_into_a_re
     assert not folder.exists()
     actions = [json.loads(m.data)["tick"] for t, m in _mcap_topics(bag) if t == "/homeo/action"]
     assert len(actions) >= 50 and actions == list(range(len(actions)))
-    r = subprocess.run([sys.executable, "-m", "homeo_launch.replay", bag, "--json"], capture_output=True, text=True,
+    r = subprocess.run([sys.executable, "-m", "homeo_record.replay", bag, "--json"], capture_output=True, text=True,
                        timeout=120)
     assert r.returncode == 0 and json.loads(r.stdout)["iterations"] == 0, r.stderr
 
@@ -243,7 +243,7 @@ import os, resource, signal, sys
 from pathlib import Path
 sys.path.insert(0, {tests!r})
 from test_recover import _left_folder
-from homeo_launch import record
+from homeo_record import record
 from homeo_launch.watch import merge_recording
 tmp = Path({tmp!r})
 folder = _left_folder(tmp, tmp / "bag", [os.getpid(), record.proc_start(os.getpid()) + 1])

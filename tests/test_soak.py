@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from homeo_launch.ops.soak import per_tick_ends, side_by_side, slope_per_10k
+from homeo_ops.soak import per_tick_ends, side_by_side, slope_per_10k
 
 
 def test_slope_is_least_squares_after_the_first_tenth():

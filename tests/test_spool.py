@@ -1,4 +1,4 @@
-"""Recording at the writers (``homeo_msgs_py.spool``, ``homeo_launch.record.WriterBag``).
+"""Recording at the writers (``homeo_msgs_py.spool``, ``homeo_record.record.WriterBag``).
 
 The spool is our own scratch format: its bytes are checked against a record packed by hand, and its
 reader against torn and arbitrary files. The bag merged from spools is read back with the
@@ -99,8 +99,8 @@ def test_the_merged_bag_reads_back_with_an_independent_reader(tmp_path):
     from mcap_ros2.decoder import DecoderFactory
     from rclpy.serialization import serialize_message
 
-    from homeo_launch.record import WriterBag
-    from homeo_launch.tap import tapped_topics
+    from homeo_record.record import WriterBag
+    from homeo_record.tap import tapped_topics
 
     topics = tapped_topics()
     bag = WriterBag(tmp_path / "bag", {"graph": "sim"}, topics)

@@ -117,7 +117,7 @@ def test_the_play_the_human_walkthrough_with_the_ros2_command_line(tmp_path):
         ros2cli.stop_daemon(env)
     assert robot.returncode == 0 and "2 iterations x 1 seed" in out, err[-3000:]
     # afterwards: what happened, from the recording
-    r = subprocess.run([sys.executable, "-m", "homeo_launch.replay", "runs/me", "--log"], cwd=tmp_path, env=env,
+    r = subprocess.run([sys.executable, "-m", "homeo_record.replay", "runs/me", "--log"], cwd=tmp_path, env=env,
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     assert "2 ticks, 2 with a wish" in r.stdout and "1 praised" in r.stdout, r.stdout

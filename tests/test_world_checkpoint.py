@@ -18,7 +18,7 @@ from homeo_msgs_py.world_rejoin import RejoinPoint
 from homeo_decision.world_host import WorldHost
 from homeo_sim.world_backend import SimWorld
 
-from homeo_launch.bus import Bus, graph_readers, robot_hosts
+from homeo_ops.bus import Bus, graph_readers, robot_hosts
 
 
 def sim_host(sc, seed: int, send, iterations: int) -> WorldHost:

@@ -1,7 +1,7 @@
 """A long graph run profiled early and late: does a tick cost more after 50,000 ticks, and where?
 
 Runs ``homeo-launch sim --iterations N --rate 0`` (signed, checkpoints every 100 ticks, as by default)
-and samples every node with py-spy (``homeo_launch.ops.profile``) for ``--window`` seconds twice:
+and samples every node with py-spy (``homeo_ops.profile``) for ``--window`` seconds twice:
 from tick ``--early`` on and from tick ``--late`` on. Prints, per window, each node's CPU
 milliseconds a tick (from /proc) and the budget's categories as shares of the wall clock, the two
 side by side; the run's wall time and each node's memory at both ends. The tick is read from the
@@ -21,9 +21,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from homeo_launch.ops import profile
-from homeo_launch.ops.soak import cpu_s, rss_mb
-from homeo_launch.procfs import stat_fields
+from homeo_ops import profile
+from homeo_ops.soak import cpu_s, rss_mb
+from homeo_record.procfs import stat_fields
 from homeo_msgs_py.graph import NODES
 
 

@@ -1,50 +1,40 @@
 """What the robot nodes share to survive crashes and restarts (``homeo_decision.checkpoint`` does
-the files): the parameters, the start from a checkpoint, and the rejoining join.
-
-Parameters (read-only):
-  supervised        the launcher restarts nodes that die: a gap in the ticks is skipped, not
-                    waited for (``homeo_msgs_py.rejoin``)
-  checkpoint_dir    write DIR/<node>.json every checkpoint_every ticks and at shutdown ('' = never)
-  checkpoint_every  ticks between checkpoints (default 100)
-  resume_dir        start from DIR/<node>.json ('' = from scratch)
-  respawned         this process replaces one that died in the same run: go on with the run's tick
-                    offset and parameters, and start fresh if no checkpoint of this launch exists
-  session           the launch's id, written into each checkpoint
-  respawn_rejoins   a start that finds this launch's own checkpoint (its session) in checkpoint_dir is
-                    a respawn: it rejoins as ``respawned`` does (ROS launch's respawn passes no flag)
+the files): the parameters (``DURABLE_PARAMS``, set at start only), the start from a checkpoint, and
+the rejoining join.
 """
 
 from __future__ import annotations
 
 import os
 
-from rcl_interfaces.msg import IntegerRange, ParameterDescriptor
-
 from homeo_msgs_py.data_dir import OutsideDataDir
 from homeo_msgs_py.graph import NODES
 from homeo_msgs_py.node_base import NodeConfigError
+from homeo_msgs_py.params import ParamSpec
 from homeo_msgs_py.rejoin import make_rejoinable
 
 from . import checkpoint
 
-DEFAULT_EVERY = 100
+CHECKPOINT_EVERY = ParamSpec("checkpoint_every", 100, "ticks between checkpoints", 1, 10**9, fixed=True)
+DURABLE_PARAMS = (
+    ParamSpec("supervised", False, "the launcher restarts nodes that die: a gap in the ticks is skipped, not waited "
+              "for (homeo_msgs_py.rejoin)", fixed=True),
+    ParamSpec("checkpoint_dir", "", "write DIR/<node>.json every checkpoint_every ticks and at shutdown ('' = never)",
+              fixed=True),
+    CHECKPOINT_EVERY,
+    ParamSpec("resume_dir", "", "start from the checkpoint in this folder ('' = from scratch)", fixed=True),
+    ParamSpec("respawned", False, "this process replaces one that died in the same run: go on with the run's tick "
+              "offset and parameters, fresh if no checkpoint of this launch exists", fixed=True),
+    ParamSpec("session", "", "the launch's id, written into each checkpoint", fixed=True),
+    ParamSpec("respawn_rejoins", False, "a start that finds this launch's own checkpoint in checkpoint_dir rejoins "
+              "the run as a respawned one does (ros2 launch respawn passes no flag)", fixed=True),
+)
 
 
 def declare(node) -> dict:
-    """Declare the parameters (set at start: ``HomeoNode.declare_fixed``); returns their values, the
-    folders resolved inside the node's data directory (``homeo_msgs_py.data_dir``)."""
-    d = lambda text: ParameterDescriptor(description=text)  # noqa: E731
-    cfg = {
-        "supervised": node.declare_fixed("supervised", False, d("restarted nodes rejoin the run: skip a gap of ticks")),
-        "checkpoint_dir": node.declare_fixed("checkpoint_dir", "", d("write the learned state here ('' = never)")),
-        "checkpoint_every": node.declare_fixed("checkpoint_every", DEFAULT_EVERY, ParameterDescriptor(
-            description="ticks between checkpoints", integer_range=[IntegerRange(from_value=1, to_value=10**9, step=1)])),
-        "resume_dir": node.declare_fixed("resume_dir", "", d("start from the checkpoint in this folder ('' = from scratch)")),
-        "respawned": node.declare_fixed("respawned", False, d("replaces a node of this run that died")),
-        "session": node.declare_fixed("session", "", d("the launch's id, written into each checkpoint")),
-        "respawn_rejoins": node.declare_fixed("respawn_rejoins", False, d(
-            "a start that finds this launch's own checkpoint in checkpoint_dir rejoins the run (ros2 launch respawn)")),
-    }
+    """Declare the parameters (set at start); returns their values, the folders resolved inside the
+    node's data directory (``homeo_msgs_py.data_dir``)."""
+    cfg = node.declare_specs(DURABLE_PARAMS)
     for key in ("checkpoint_dir", "resume_dir"):
         try:
             cfg[key] = node.data_path(cfg[key], key, trusted=True)  # set at start only

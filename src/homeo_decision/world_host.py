@@ -1,11 +1,11 @@
 """The world side of the graph, for any world (no rclpy): one ``WorldBackend`` in lockstep.
 
-The host is the lockstep driver's side (``homeo_msgs_py.lockstep.WorldSide``) over a backend, and
+The host runs the lockstep driver (``homeo_msgs_py.lockstep.LockstepDriver``) over a backend and
 adds what every world needs, written once: the trace (one JSON line per tick), the run status,
 the actions a robot could not perform (logged and counted), the end of a run whose world has no
 more to give, the run's checkpoint (the driver's position and the backend's state in one
 envelope), and the way back into a run after the node was restarted. The world node
-(``world_node.py``) and the in-memory bus runner (``homeo_launch.bus``) run this same object.
+(``world_node.py``) and the in-memory bus runner (``homeo_ops.bus``) run this same object.
 """
 
 from __future__ import annotations
@@ -17,12 +17,15 @@ from typing import Callable
 from homeo_msgs_py.graph import WORLD
 from homeo_msgs_py.lockstep import LockstepDriver
 
-from .checkpoint import (CheckpointError, check_codes, check_int, check_number, check_world_position, codes_print,
-                         envelope, scenario_print)
-from .codec import vocabulary
-from .world_api import WorldBackend
+from homeo_msgs_py.params import ParamSpec
 
-RUN_KEYS = ("iterations", "rate", "action_timeout")  # the run's settings a restarted node takes from its checkpoint
+from .checkpoint import CheckpointError, check_codes, check_world_position, codes_print, envelope, scenario_print
+from .codec import vocabulary
+from .world_api import ACTION_TIMEOUT, ITERATIONS, RATE, WorldBackend
+
+RUN_PARAMS = (ITERATIONS, RATE, ACTION_TIMEOUT)  # the run's settings a restarted node takes from its checkpoint
+RUN_KEYS = tuple(s.name for s in RUN_PARAMS)
+TRACE_BYTES = ParamSpec("trace_bytes", 0, "bytes of the trace the checkpoint's run wrote", 0, 2**62)
 
 
 class WorldHost:
@@ -32,40 +35,14 @@ class WorldHost:
                  clock: Callable[[], float] = time.monotonic):
         self.world, self.sc = backend, backend.sc
         self.trace = trace  # a text file open for writing, or None
-        self._out = send
         self.log = log or (lambda text: None)
         self.warn = warn or self.log
         self.note = note or (lambda what, n=1: None)
-        self.driver = LockstepDriver(self, self._send, iterations=iterations, rate=rate, timeout=timeout,
+        self.driver = LockstepDriver(backend, send, iterations=iterations, rate=rate, timeout=timeout,
                                      run_async=run_async, log=self.log, note=self.note, clock=clock)
+        self.driver.on_outcome = self._stepped
 
-    # -- the driver's side: the backend, traced ---------------------------------------------------
-    @property
-    def last_missed(self) -> bool:
-        return self.world.last_missed
-
-    def start(self) -> None:
-        self.world.start()
-
-    def observe(self, final: bool) -> tuple[dict, dict]:
-        return self.world.observe(final)
-
-    def step(self, action_fields: dict | None) -> dict:
-        return self._traced(self.driver.tick, action_fields, self.world.step(action_fields))
-
-    def step_failed(self, action_fields: dict | None, reason: str) -> dict:
-        return self._traced(self.driver.tick, action_fields, self.world.step_failed(action_fields, reason))
-
-    def check_action(self, fields: dict, tick: int) -> None:
-        self.world.check_action(fields, tick)
-
-    def record(self, action_fields: dict | None) -> None:
-        self.world.record(action_fields)
-
-    def status(self, done: bool) -> dict:
-        return self.world.status(done)
-
-    def _traced(self, tick: int, action_fields: dict | None, out: dict) -> dict:
+    def _trace(self, tick: int, action_fields: dict | None, out: dict) -> dict:
         if self.trace is not None:
             truth = out.get("truth")
             self.trace.write(json.dumps({"tick": tick,
@@ -74,10 +51,10 @@ class WorldHost:
                                          "feedback": out["feedback"], "proposal": out["proposal"]}) + "\n")
         return out
 
-    def _send(self, key: str, tick: int, fields: dict, run: int) -> None:
-        self._out(key, tick, fields, run)
-        if key != "outcome":
-            return
+    def _stepped(self, tick: int, action_fields: dict | None, fields: dict) -> None:
+        """Tick ``tick`` was stepped, its outcome about to go out: traced, a failure noted, and a world with
+        no more to give ends the run after the next tick."""
+        self._trace(tick, action_fields, fields)
         w = self.world
         if w.last_failure is not None:
             self.note("failed actions")
@@ -133,12 +110,10 @@ class WorldHost:
                 if p.get(key) != ours[key]:
                     raise CheckpointError(f"a checkpoint of another run ({key} {str(p.get(key))[:40]!r}, this "
                                           f"node's {ours[key]!r})")
-            run = {"iterations": check_int(p.get("iterations"), "iterations", 0, 10**9),
-                   "rate": check_number(p.get("rate"), "rate", 0.0, 1000.0),
-                   "action_timeout": check_number(p.get("action_timeout"), "action_timeout", 0.01, 3600.0)}
+            run = {s.name: s.check(p.get(s.name)) for s in RUN_PARAMS}
             tb = p.get("trace_bytes")
-            trace_bytes = None if tb is None else check_int(tb, "trace_bytes")
-        except CheckpointError as exc:
+            trace_bytes = None if tb is None else TRACE_BYTES.check(tb)
+        except ValueError as exc:
             raise CheckpointError(f"{where}: corrupt checkpoint (params: {exc})") from None
         pos = check_world_position(st.get("position"), self.sc, vocabulary(self.sc), where)
         if pos["run"] != ck["run"] or pos["tick"] != ck["ticks"]:
@@ -157,6 +132,6 @@ class WorldHost:
         """After a restart: the driver rejoins ``run`` at ``tick``; ``lost`` ticks since the position
         were never seen (counted as missed)."""
         lost_ticks = iter(range(tick - lost, tick))  # stepped by a world whose time went on: traced as they go
-        fields = self.world.rejoin(tick, lost, lambda: self._traced(next(lost_ticks), None, self.world.step(None)))
+        fields = self.world.rejoin(tick, lost, lambda: self._trace(next(lost_ticks), None, self.world.step(None)))
         outcome = (tick - 1, fields) if fields is not None else pos["outcome"]
         self.driver.rejoin(run, tick, pos["missed"] + lost, pos["elapsed"], outcome)

@@ -33,7 +33,7 @@ from homeo_msgs_py.node_base import NodeConfigError
 
 from . import durable
 from .node_runtime import ScenarioNode, run_scenario_node
-from .world_api import WORLD_PARAMS, WorldConfigError, WorldContext, world_class
+from .world_api import WORLD_PARAMS, WorldConfigError, world_class
 from .world_host import WorldHost
 
 DESC = NODES[WORLD]
@@ -56,9 +56,8 @@ class WorldNode(durable.DurableWorld, ScenarioNode):
         self._world_params = {s.name for s in cls.PARAMS}
         v.update(self.declare_specs(cls.PARAMS))
         cfg = durable.declare(self)  # checkpoints; a respawned node goes on with the run (durable.DurableWorld)
-        ctx = WorldContext(log=self._log, note=self.rejects.note, data_path=self.data_path)
         try:
-            self.world = cls(self.sc, v, ctx)
+            self.world = cls(self.sc, v)
         except (WorldConfigError, OutsideDataDir) as exc:
             raise NodeConfigError(str(exc)) from None
         self.learning = v["intention_learns"]

@@ -1,12 +1,9 @@
 """``homeo-launch``: the node graph with any world of the registry, from one command.
 
-    homeo-launch sim | pepper | day | <any registered world> [options]   the graph (``launch.py``)
+    homeo-launch NAME [options]        the graph with the world NAME of the registry (``front.py``)
     homeo-launch watch [options]       follow a graph ros2 launch started (``watch.py``, ``ros_launch.py``)
-    homeo-launch bench | soak | recover [options]                        operations (``ops/``)
-
-Each world of the ``homeo_robot.worlds`` registry is a command: the Pepper has its own front end
-(``pepper.py``: a stand-in robot, the interaction log, the field test), every other world the
-simulation's (``sim.py``: its parameters as flags, Table 4.5's metrics at the end).
+    homeo-launch bench | soak | ...    the commands other packages add (entry points ``homeo_robot.commands``:
+                                       the operations tools of ``homeo_ops``)
 """
 
 from __future__ import annotations
@@ -16,29 +13,34 @@ import sys
 
 from homeo_decision.qtable_io import QTableError
 from homeo_decision.scenario import ScenarioError
-from homeo_decision.world_api import WorldConfigError, registered
+from homeo_decision.world_api import WorldConfigError, registered, world_class
 from homeo_msgs_py.cli_args import Parser, run_command
 
 from .launch import PROG
 from .monitor import GraphError
 
+COMMANDS = "homeo_robot.commands"  # name -> a module with add_parser(sub) and cmd_NAME(args)
+
+
+def commands() -> dict:
+    from importlib.metadata import entry_points
+
+    return {ep.name: ep for ep in entry_points(group=COMMANDS)}
+
 
 def build_parser() -> argparse.ArgumentParser:
-    from . import pepper, sim, watch
-    from .ops import bench, recover, soak
+    from . import front, watch
 
     ap = Parser(prog=PROG, description="Start the homeostatic robot's ROS 2 node graph.")
     sub = ap.add_subparsers(dest="cmd", required=True, parser_class=Parser)
-    worlds = registered()
-    for name in sorted(worlds, key=lambda n: (n != "sim", n)):  # sim first: the default world
-        if name == "pepper":
-            pepper.add_parser(sub)
-        else:
-            sim.add_parser(sub, name, worlds[name].load())
+    for name in sorted(registered(), key=lambda n: (n != "sim", n)):  # sim first: the default world
+        try:
+            front.add_parser(sub, name, world_class(name))
+        except WorldConfigError as exc:  # another package's world that does not load: said, not fatal
+            sub.add_parser(name, help=f"(does not load: {exc})").set_defaults(broken=str(exc))
     watch.add_parser(sub)
-    bench.add_parser(sub)
-    soak.add_parser(sub)
-    recover.add_parser(sub)
+    for name, ep in sorted(commands().items()):
+        ep.load().add_parser(sub)
     return ap
 
 
@@ -56,21 +58,17 @@ def main(argv=None) -> int:
 
     def command() -> int:
         args = build_parser().parse_args(argv)
-        if args.cmd == "pepper":
-            from .pepper import cmd_pepper
-
-            return cmd_pepper(args)
+        if getattr(args, "broken", None):
+            raise WorldConfigError(args.broken)
         if args.cmd == "watch":
             from .watch import cmd_watch
 
             return cmd_watch(args)
-        if args.cmd in ("bench", "soak", "recover"):
-            from importlib import import_module
+        if args.cmd in commands():
+            return getattr(commands()[args.cmd].load(), f"cmd_{args.cmd}")(args)
+        from .front import cmd_world
 
-            return getattr(import_module(f".ops.{args.cmd}", __package__), f"cmd_{args.cmd}")(args)
-        from .sim import cmd_sim
-
-        return cmd_sim(args)
+        return cmd_world(args)
 
     return run_command(PROG, command, (ScenarioError, QTableError, WorldConfigError), (GraphError,))
 

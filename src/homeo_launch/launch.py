@@ -4,9 +4,8 @@
 ``GraphOptions``), waits until every node and endpoint is discovered, supervises it (a node that
 dies is restarted from its checkpoint: ``supervise.py``), follows the world's run status and
 returns its last one. Ctrl-C stops every node after saving what was asked (``--save-q``, the
-nodes' final checkpoints). ``homeo-launch sim`` and ``homeo-launch pepper`` are front ends of this
-one launcher (``sim.py``, ``pepper.py``); any other world of the registry runs through
-``world.py``'s generic front end.
+nodes' final checkpoints). ``homeo-launch NAME`` (``front.py``) is its front end for every world of
+the registry, and the world's companions (a stand-in robot) run beside the nodes.
 """
 
 from __future__ import annotations
@@ -50,6 +49,7 @@ class GraphOptions:
     data_dir: str = DATA_DIR  # files named by parameters live here (homeo_msgs_py.data_dir)
     namespace: str = ""  # the whole graph under /namespace
     auth: bool = True  # the graph signs its messages (docs/SECURITY.md); --no-auth for debugging
+    companions: tuple = ()  # world_api.Companion: processes beside the nodes (a stand-in robot), started first
 
     @property
     def iterations(self) -> int:
@@ -85,7 +85,8 @@ def graph_specs(o: GraphOptions) -> list[NodeSpec]:
                      session=o.session)
         if o.resume and n in ("homeo_intention", "homeo_decision"):  # the learned state; a world starts a new run
             p["resume_dir"] = os.path.abspath(o.resume)
-    return [NodeSpec(n, NODES[n].module, params[n]) for n in GRAPH]
+    return ([NodeSpec(c.name, "", argv=list(c.argv)) for c in o.companions]
+            + [NodeSpec(n, NODES[n].module, params[n]) for n in GRAPH])
 
 
 def run_graph(o: GraphOptions, *, quiet: bool = False, log_dir: str | None = None, on_status=None,
@@ -199,7 +200,7 @@ def open_tap(mon: Monitor, graph: Graph, tap_sinks: list, writers):
     the graph takes from outside; None when nothing needs one."""
     if not tap_sinks and (writers is None or not writers.tap_topics):
         return None
-    from .tap import Tap
+    from homeo_record.tap import Tap
 
     sinks = tap_sinks + ([writers] if writers is not None else [])
     return Tap(mon.node, sinks, topics=None if tap_sinks else writers.tap_topics, signer=graph.signer)

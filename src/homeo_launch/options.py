@@ -1,4 +1,4 @@
-"""The command-line options every graph command shares (``sim``, ``pepper``, any world's), and their
+"""The command-line options every graph command shares (any world's, ``homeo-launch NAME``), and their
 checks before anything starts: the run's (seed, scenario, timeouts, output), the graph's (namespace,
 data directory, authentication), checkpoints and restarts, the recorder and the live view (the
 launcher's tap and its sinks), and the files the options name.
@@ -10,21 +10,28 @@ import argparse
 import os
 import sys
 
+from dataclasses import replace
+
+from homeo_decision.durable import CHECKPOINT_EVERY
 from homeo_msgs_py import data_dir
-from homeo_msgs_py.cli_args import UserError, float_in, int_at_least, user_path
-from homeo_msgs_py.graph import SEED_MAX
+from homeo_msgs_py.cli_args import UserError, user_path
+from homeo_msgs_py.params import ParamSpec, add_flag
 
 from .launch import PROG
 
+MAX_RESTARTS = ParamSpec("max_restarts", 3, "restart a robot node that dies up to this many times (0: a death stops "
+                         "the graph)", 0, 100)
 
-def add_run_options(p, name: str, seed_help: str = "seed of every component (default 0)") -> None:
+
+def add_run_options(p, name: str) -> None:
     """What every graph command takes: seed, scenario, action timeout, logs and output, the graph's
     options, the recorder and the live view, checkpoints and restarts."""
-    p.add_argument("--seed", type=int_at_least(0, SEED_MAX), default=0, help=seed_help)
+    from homeo_decision.world_api import ACTION_TIMEOUT, SEED
+
+    add_flag(p, replace(SEED, doc="seed of every component"), default=SEED.default)
     p.add_argument("--scenario", metavar="FILE", type=user_path, default=None,
                    help="scenario JSON (default: the thesis scenario)")
-    p.add_argument("--action-timeout", type=float_in(0.01, 3600.0), default=5.0,
-                   help="seconds to wait for the decision before a tick counts as no action (default 5)")
+    add_flag(p, ACTION_TIMEOUT, default=ACTION_TIMEOUT.default)
     p.add_argument("--log-dir", metavar="DIR", type=user_path,
                    help="keep each node's log here (default: a temporary directory)")
     p.add_argument("--json", action="store_true", help="print the run's result as JSON")
@@ -35,7 +42,7 @@ def add_run_options(p, name: str, seed_help: str = "seed of every component (def
 
 
 def add_graph_options(p) -> None:
-    """``--namespace`` and ``--no-auth``, shared by ``sim`` and ``pepper``."""
+    """``--namespace``, ``--data-dir`` and ``--no-auth``."""
     p.add_argument("--namespace", type=_namespace_arg, default="", metavar="NS",
                    help="put the whole graph (nodes, topics, services) under /NS, so several robots share a domain")
     p.add_argument("--data-dir", metavar="DIR", type=user_path, default=data_dir.default_dir(),
@@ -90,14 +97,12 @@ def add_durable_options(p, graph: str) -> None:
                    help=f"write the robot nodes' learned state here every --checkpoint-every ticks and at the end "
                         f"(inside --data-dir; default: DATA_DIR/{CHECKPOINT_ROOT}/NAMESPACE or {graph}, or the --resume "
                         f"folder)")
-    g.add_argument("--checkpoint-every", metavar="N", type=int_at_least(1), default=100,
-                   help="ticks between checkpoints (default 100)")
+    add_flag(g, CHECKPOINT_EVERY, default=CHECKPOINT_EVERY.default)
     g.add_argument("--no-checkpoints", action="store_true", help="write no checkpoints (a restarted node starts fresh)")
     g.add_argument("--resume", metavar="DIR", type=user_path, default=None,
                    help="continue from the checkpoints in DIR: the Q-table, the intention model, the random "
                         "streams, and the learning schedule from the ticks learned")
-    g.add_argument("--max-restarts", metavar="N", type=int_at_least(0), default=3,
-                   help="restart a robot node that dies up to N times (default 3; 0: a death stops the graph)")
+    add_flag(g, MAX_RESTARTS, default=MAX_RESTARTS.default)
 
 
 def durable_options(a, graph: str, sc, bayes: bool) -> dict:
@@ -174,22 +179,23 @@ def check_files(a, write=(), tables=(), sc=None) -> None:
             raise UserError(f"--log-dir {a.log_dir} is not writable")
 
 
-def open_sinks(a, world: str, iterations: int, seed: int, sc, overrides, **extra) -> list:
-    """The tap's sinks the command line asks for: ``--record DIR`` (a bag), ``--foxglove`` (live)."""
-    from .tap import tapped_topics
+def open_sinks(a, world: str, iterations: int, seed: int, sc, overrides, inputs=(), **extra) -> list:
+    """The tap's sinks the command line asks for: ``--record DIR`` (a bag), ``--foxglove`` (live; its
+    client may publish the topics the world reads from outside, ``inputs``)."""
+    from homeo_record.tap import tapped_topics
 
     topics = tapped_topics(namespace=getattr(a, "namespace", ""))
     sinks = []
     try:
         if getattr(a, "record", None):
-            from .record import check_new_bag, new_bag, run_info
+            from homeo_record.record import check_new_bag, new_bag, run_info
 
             sinks.append(new_bag(check_new_bag(a.record), run_info(world, iterations, seed, sc, overrides, **extra),
                                  topics, getattr(a, "record_from", "writers")))
         if getattr(a, "foxglove", None):
-            from .live import FoxgloveSink
+            from homeo_record.live import FoxgloveSink
 
-            sinks.append(FoxgloveSink(a.foxglove, sc, topics, person=getattr(a, "human", None) == "person"))
+            sinks.append(FoxgloveSink(a.foxglove, sc, topics, person="human_input" in inputs))
             if not getattr(a, "quiet", False):
                 print(f"{PROG}: Foxglove: open ws://{a.foxglove[0]}:{sinks[-1].port}", file=sys.stderr)
     except BaseException:

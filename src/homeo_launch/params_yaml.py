@@ -1,4 +1,5 @@
-"""``config/params.yaml`` and ``config/pepper.yaml``: every node's parameters with their defaults.
+"""A world's parameters file (``config/params.yaml`` is the simulation's; ``config/`` holds one per shipped world):
+every node's parameters with their defaults.
 
 Read off the nodes themselves (each built once in this process, as ``ros2 param dump`` would read
 them), so the files cannot drift from the declarations; ROS's own parameters (``use_sim_time``...)
@@ -7,7 +8,7 @@ file for ``ros2 param load`` and for ``params_file:=`` of the launch files, as i
 dump`` writes. ``tests/test_ros2_workspace.py`` checks the shipped files are these.
 
     python -m homeo_launch.params_yaml sim > config/params.yaml
-    python -m homeo_launch.params_yaml pepper > config/pepper.yaml
+    python -m homeo_launch.params_yaml NAME > my_world.yaml     # any world of the registry
 """
 
 from __future__ import annotations
@@ -20,17 +21,16 @@ from homeo_msgs_py.data_dir import DEFAULT as DATA_DIR  # the launchers' default
 ROS_OWN = ("use_sim_time", "start_type_description_service")  # rclpy declares these on every node
 
 
-def node_classes(world: str) -> list:
-    """(node name, class) of the graph's nodes; with the Pepper world, its world node alone."""
+def node_classes() -> list:
+    """(node name, class) of the graph's nodes."""
     from homeo_decision.drives_node import DrivesNode
     from homeo_decision.node import DecisionNode
     from homeo_decision.world_node import WorldNode
     from homeo_intention.node import IntentionNode
     from homeo_msgs_py.graph import WORLD
 
-    classes = [(WORLD, WorldNode), ("homeo_intention", IntentionNode), ("homeo_drives", DrivesNode),
-               ("homeo_decision", DecisionNode)]
-    return classes[:1] if world == "pepper" else classes
+    return [(WORLD, WorldNode), ("homeo_intention", IntentionNode), ("homeo_drives", DrivesNode),
+            ("homeo_decision", DecisionNode)]
 
 
 def defaults(world: str = "sim") -> dict:
@@ -46,7 +46,7 @@ def defaults(world: str = "sim") -> dict:
     stdout = os.dup(1)
     os.dup2(2, 1)  # what the nodes' libraries print (libqi's notes) goes to stderr, not into the file
     try:
-        for name, cls in node_classes(world):
+        for name, cls in node_classes():
             node = cls()
             try:
                 out[f"/{name}"] = {"ros__parameters": {
@@ -65,14 +65,17 @@ def defaults(world: str = "sim") -> dict:
 def render(world: str = "sim") -> str:
     import yaml
 
-    head = (f"# every node's parameters and their defaults ({'the Pepper world' if world == 'pepper' else 'the graph'}"
-            f"): python -m homeo_launch.params_yaml {world}\n")
+    head = f"# every node's parameters and their defaults, world {world}: python -m homeo_launch.params_yaml {world}\n"
     return head + yaml.safe_dump(defaults(world), sort_keys=False, default_flow_style=False)
 
 
 if __name__ == "__main__":
+    from homeo_decision.world_api import WorldConfigError, world_class
+
     world = sys.argv[1] if len(sys.argv) > 1 else "sim"
-    if world not in ("sim", "pepper"):
-        print(f"usage: python -m homeo_launch.params_yaml [sim|pepper], not {world!r}", file=sys.stderr)
+    try:
+        world_class(world)
+    except WorldConfigError as exc:
+        print(f"params_yaml: error: {exc}", file=sys.stderr)
         sys.exit(2)
     sys.stdout.write(render(world))

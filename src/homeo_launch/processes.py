@@ -22,6 +22,7 @@ from pathlib import Path
 
 from homeo_msgs_py.auth import ENV as AUTH_ENV
 from homeo_msgs_py.auth import load_signer, make_secret
+from homeo_msgs_py.qos import dds_defaults  # noqa: F401 - the launchers' and tests' import
 
 STOP_GRACE_S = 3.0  # SIGINT, then SIGTERM, then SIGKILL: the whole stop stays under 5 s
 
@@ -32,16 +33,7 @@ class NodeSpec:
     module: str  # python -m MODULE
     params: dict = field(default_factory=dict)
     args: list = field(default_factory=list)  # extra command-line arguments before --ros-args
-
-
-def dds_defaults(env=os.environ) -> dict:
-    """DDS settings of the project, each unless the user set it: discovery on this machine only,
-    and Fast DDS's built-in transports limited to UDP. With discovery on this machine only,
-    rmw_fastrtps (Jazzy) sets its own transports, shared memory and UDP on loopback, and the
-    second setting has no effect (seen: ``dds.shm.*`` threads in every node); it applies when
-    the user widens the range (ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET)."""
-    return {k: env.get(k, v) for k, v in (("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST"),
-                                          ("FASTDDS_BUILTIN_TRANSPORTS", "UDPv4"))}
+    argv: list | None = None  # a companion of the graph (a stand-in robot): its own command line, not a node
 
 
 def graph_env(domain_id: int | None = None) -> dict:
@@ -84,12 +76,14 @@ class Graph:
         for s in self.specs:
             if s.name in self.procs or (names is not None and s.name not in names):
                 continue
-            pfile = self.log_dir / f"{s.name}.params.json"
-            # JSON is YAML: rcl reads it as a parameters file; strings stay strings
-            pfile.write_text(json.dumps({"/**": {"ros__parameters": s.params}}))  # this node's file alone
-            cmd = [sys.executable, "-m", s.module, *s.args, "--ros-args", "--params-file", str(pfile)]
-            if self.namespace:
-                cmd += ["-r", f"__ns:={self.namespace}"]
+            cmd = list(s.argv or ())
+            if s.argv is None:
+                pfile = self.log_dir / f"{s.name}.params.json"
+                # JSON is YAML: rcl reads it as a parameters file; strings stay strings
+                pfile.write_text(json.dumps({"/**": {"ros__parameters": s.params}}))  # this node's file alone
+                cmd = [sys.executable, "-m", s.module, *s.args, "--ros-args", "--params-file", str(pfile)]
+                if self.namespace:
+                    cmd += ["-r", f"__ns:={self.namespace}"]
             log = open(self.log_dir / f"{s.name}.log", "wb")
             self.procs[s.name] = subprocess.Popen(cmd, env=self.env, stdin=subprocess.DEVNULL, stdout=log,
                                                   stderr=subprocess.STDOUT, start_new_session=True)
@@ -116,7 +110,8 @@ class Graph:
     def rss_mb(self) -> float:
         """Resident memory of all node processes, in MiB (from /proc)."""
         total = 0
-        for p in self.procs.values():
+        nodes = {s.name for s in self.specs if s.argv is None}
+        for p in (p for n, p in self.procs.items() if n in nodes):
             try:
                 for line in Path(f"/proc/{p.pid}/status").read_text().splitlines():
                     if line.startswith("VmRSS:"):

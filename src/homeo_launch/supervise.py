@@ -57,7 +57,8 @@ class Supervisor:
             n = self.restarts.get(name, 0)
             if not self.respawnable(name) or code == CONFIG_ERROR:  # a bad configuration stays bad
                 tail = g.log_tail(name)
-                raise GraphError(f"node {name} exited with code {code}" + (f"; its last output:\n{tail}" if tail else ""))
+                what = "node" if name in NODES else "process"  # a companion (a stand-in robot) is not restarted
+                raise GraphError(f"{what} {name} exited with code {code}" + (f"; its last output:\n{tail}" if tail else ""))
             if n >= self.max_restarts:
                 raise GraphError(f"node {name} died {n + 1} times (last exit code {code}); stopping the graph")
             delay = BACKOFF_S[min(n, len(BACKOFF_S) - 1)]

@@ -1,8 +1,8 @@
 """``homeo-launch watch``: the launcher's part of a graph that ROS 2's launch system started.
 
-``ros2 launch homeo_robot sim.launch.py`` starts the four nodes and this command beside them
-(``ros_launch.py``): it follows the world's run status with a progress bar, and at the end prints
-what ``homeo-launch sim`` or ``pepper`` prints, saves the Q-table asked for, writes the recording
+``ros2 launch homeo_robot world.launch.py world:=NAME`` starts the four nodes and this command beside
+them (``ros_launch.py``): it follows the world's run status as ``homeo-launch NAME`` does, and at the
+end prints what it prints (the world's result), saves the Q-table asked for, writes the recording
 (the writers' spools, merged into the bag), and exits; the launch file then shuts the graph down.
 Ctrl-C (ros2 launch passes it on) prints the run so far, with its real tick count and time.
 """
@@ -14,8 +14,9 @@ import signal
 import sys
 from pathlib import Path
 
-from homeo_msgs_py.cli_args import int_at_least, setting, user_path
-from homeo_msgs_py.graph import SEED_MAX, TICKS_MAX
+from homeo_decision.world_api import ITERATIONS, SEED
+from homeo_msgs_py.cli_args import setting, user_path
+from homeo_msgs_py.params import add_flag
 
 from .launch import PROG, save_q
 from .options import _namespace_arg
@@ -25,8 +26,10 @@ def add_parser(sub) -> None:
     w = sub.add_parser("watch", help="follow a graph that ros2 launch started: its progress, then its result "
                                      "(the launch files run it)")
     w.add_argument("--world", default="sim", help="the world the graph runs (how its result reads)")
-    w.add_argument("--iterations", type=int_at_least(0, TICKS_MAX), default=0, help="the run's ticks, for progress")
-    w.add_argument("--seed", type=int_at_least(0, SEED_MAX), default=0)
+    w.add_argument("--setting", type=_setting, default={}, metavar="JSON",
+                   help="the launch's setting for the world's result: {intention, learning, values}")
+    add_flag(w, ITERATIONS, default=0)
+    add_flag(w, SEED, default=0)
     w.add_argument("--scenario", metavar="FILE", type=user_path, default=None)
     w.add_argument("--set", metavar="KEY=VALUE", type=setting, action="append", default=[])
     w.add_argument("--namespace", type=_namespace_arg, default="", metavar="NS")
@@ -37,23 +40,38 @@ def add_parser(sub) -> None:
     w.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
+def _setting(text: str) -> dict:
+    import argparse
+
+    try:
+        v = json.loads(text)
+    except ValueError:
+        v = None
+    if not isinstance(v, dict) or set(v) - {"intention", "learning", "values"} \
+            or not all(isinstance(v.get(k, {}), dict) for k in ("learning", "values")):
+        raise argparse.ArgumentTypeError("must be a JSON object of intention, learning and values")
+    return v
+
+
 def cmd_watch(a) -> int:
     from homeo_decision.scenario import load_scenario
+    from homeo_decision.world_api import world_class
     from homeo_msgs_py.auth import load_signer
 
+    from .front import Progress, print_result
     from .monitor import Monitor, RunFollower
-    from .sim import progress_bar
 
+    cls = world_class(a.world)
     sc = load_scenario(a.scenario, overrides=dict(a.set))
     mon = Monitor(a.namespace, load_signer())
-    bar = progress_bar(a.quiet, a.iterations)
+    show = Progress(cls, a.quiet or a.json, a.iterations)
     run, interrupted = RunFollower(), False
     last = run.last
     try:
         while not last.get("done"):
             mon.spin(0.05)
             if run.take(mon.status):
-                bar(mon.status.tick, mon.status.fields)
+                show(mon.status.tick, mon.status.fields)
         if a.save_q:
             ok, msg = save_q(mon, timeout=10.0)
             if not ok:
@@ -63,35 +81,21 @@ def cmd_watch(a) -> int:
         for sig in (signal.SIGINT, signal.SIGTERM):  # ros2 launch passes the terminal's Ctrl-C on: one is enough
             signal.signal(sig, signal.SIG_IGN)
     finally:
-        bar.close()
+        show.close()
         mon.close()
         if a.record_spool:
             merge_recording(Path(a.record_spool))
     last["elapsed_s"] = run.elapsed_s()
-    if a.world == "pepper":
-        return print_log(last, a.json)
-    from .sim import print_result
-
-    print_result(last, interrupted, sc, a.seed, a.iterations, a.json)
+    setting = dict(a.setting, seed=a.seed, iterations=a.iterations, interrupted=interrupted)
+    setting.setdefault("intention", next(iter(cls.INTENTIONS.values())))
+    print_result(cls, sc, last, setting, a.json, bounded=False)
     return 0  # stopped or done: either is the end the user asked for
-
-
-def print_log(status: dict, as_json: bool) -> int:
-    """A robot world's result: its interaction log (the run status's ``extra.log``)."""
-    from .pepper import print_log_table
-
-    log = (status.get("extra") or {}).get("log") or []
-    if as_json:
-        print(json.dumps({"interactions": len(log), "missed": status.get("missed", 0), "log": log}, indent=1))
-    else:
-        print_log_table(log, status.get("missed", 0))
-    return 0
 
 
 def merge_recording(folder: Path) -> None:
     """The spool folder a launch file made (its manifest names the bag) merged into the bag; kept,
     with one line, when that cannot be done (``homeo-launch recover`` tries again)."""
-    from .record import NotRecovered, read_manifest, spools_to_bag
+    from homeo_record.record import NotRecovered, read_manifest, spools_to_bag
 
     try:
         bag, _, info, topics = read_manifest(folder)

@@ -55,10 +55,17 @@ def user_path(s: str) -> str:
     return os.path.expanduser(s)
 
 
-def setting(s: str) -> tuple[str, object]:
+def key_value(s: str) -> tuple[str, str]:
+    """``KEY=VALUE``, the value as text (its declaration parses it)."""
     if "=" not in s:
         raise argparse.ArgumentTypeError(f"{s!r} is not KEY=VALUE")
     k, v = s.split("=", 1)
+    return k.strip(), v
+
+
+def setting(s: str) -> tuple[str, object]:
+    """``KEY=VALUE``, the value as JSON where it is JSON (a scenario's open choice), else as text."""
+    k, v = key_value(s)
     try:
         val = json.loads(v)
     except json.JSONDecodeError:
@@ -93,3 +100,24 @@ def run_command(prog: str, command, user_errors: tuple = (), failures: tuple = (
     except KeyboardInterrupt:
         print(f"{prog}: interrupted", file=sys.stderr)
         return 130
+
+
+def die_with_parent() -> None:
+    """Nodes (and companions) started by the launcher end if it is killed outright (no orphans)."""
+    import os
+    import signal
+
+    ppid = os.environ.get("HOMEO_PARENT_PID")
+    if not ppid:
+        return
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL("libc.so.6", use_errno=True)
+        # PR_SET_PDEATHSIG: the launcher stops its nodes gracefully; this fires only when it died
+        # without doing so, and then nothing must be left running
+        libc.prctl(1, signal.SIGKILL)
+        if os.getppid() != int(ppid):  # the parent died before prctl
+            os._exit(1)
+    except (OSError, AttributeError, ValueError):
+        pass

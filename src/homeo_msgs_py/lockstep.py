@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Callable, Protocol
+from typing import Callable
 
 from .schemas import Message, Rejected
 
@@ -95,47 +95,20 @@ WAITING, STARTING, RUNNING, FINISHING, DONE = "waiting", "starting", "running", 
 RETRY_S = 0.5  # pause before observing again after a failed observation (a robot that is away)
 
 
-class WorldSide(Protocol):
-    """What a world node offers the driver, in message fields (``homeo_decision.codec``)."""
-
-    def start(self) -> None:
-        """Before tick 0 (a robot collects the user's first expression); may block."""
-
-    def observe(self, final: bool) -> tuple[dict, dict]:
-        """``homeo/world`` and ``homeo/observation`` fields of the current tick; may block or raise."""
-
-    def step(self, action_fields: dict | None) -> dict:
-        """Perform the tick's action (``homeo/action`` fields; None: no action came); the
-        ``homeo/outcome`` fields; may block."""
-
-    last_missed: bool  # whether the last step could not be performed at all (a robot that was away)
-
-    def step_failed(self, action_fields: dict | None, reason: str) -> dict:
-        """The outcome fields when ``step`` raised: nothing was done."""
-
-    def check_action(self, fields: dict, tick: int) -> None:
-        """Raise Rejected for an action message the world cannot use (e.g. no drives for the metrics)."""
-
-    def record(self, action_fields: dict | None) -> None:
-        """The robot's drives after the last tick came back with this action message (metrics)."""
-
-    def status(self, done: bool) -> dict:
-        """Extra ``homeo/run_status`` fields (``metrics``, ``extra``)."""
-
-
 class LockstepDriver:
     """Tick k of a world node: observe, publish observation(k) and world(k), wait for action(k)
     (a timeout counts as no action), step, publish outcome(k), then tick k+1. After the last tick a
     final world lets the robot learn from the last outcome; the final message that answers it
     carries the drives the metrics of the last tick need.
 
-    ROS-free: the node calls ``begin`` once its readers have matched, ``on_action`` for every
+    ``side`` is the world (``homeo_decision.world_api.WorldBackend``, whose docstring gives the calls
+    and their rules). ROS-free: the node calls ``begin`` once its readers have matched, ``on_action`` for every
     decoded action message (a ``Rejected`` it raises is the reason to drop it) and ``poll`` from a
     timer; ``send(topic key, tick, fields, run)`` publishes. ``run_async(fn, *args)`` runs the
     side's blocking calls off the executor and returns a future (a robot); without it they run
     inline (the simulation, whose steps take microseconds)."""
 
-    def __init__(self, side: WorldSide, send: Callable, *, iterations: int, rate: float = 0.0, timeout: float = 5.0,
+    def __init__(self, side, send: Callable, *, iterations: int, rate: float = 0.0, timeout: float = 5.0,
                  run_async: Callable | None = None, log: Callable[[str], None] | None = None,
                  note: Callable[[str], None] | None = None, clock: Callable[[], float] = time.monotonic):
         self.side, self.send = side, send
@@ -148,6 +121,8 @@ class LockstepDriver:
         self.on_step: Callable[[int], None] | None = None
         # called with tick k and the action message performed in it (None: none came), as the step starts
         self.on_act: Callable[[int, dict | None], None] | None = None
+        # called with tick k, its action message and its outcome's fields, once, before the outcome goes out
+        self.on_outcome: Callable[[int, dict | None, dict], None] | None = None
         self._reset_run()
 
     def _reset_run(self) -> None:
@@ -217,6 +192,8 @@ class LockstepDriver:
             if getattr(self.side, "last_missed", False):  # the world could not act at all: a missed tick
                 self.missed += 1
                 self.note("missed ticks")
+            if self.on_outcome is not None:
+                self.on_outcome(self.tick, args[0], fields)
             self.send("outcome", self.tick, fields, self.run)
             self._outcome, self._observed = (self.tick, fields), None
             self.tick += 1

@@ -19,6 +19,7 @@ from std_msgs.msg import String
 
 from . import data_dir
 from .auth import AuthError, load_signer
+from .cli_args import die_with_parent
 from .diagnostics import RejectLog
 from .graph import DIAGNOSTICS, LAUNCHER, NODES, RECORDER, SIGNED, TOPICS, min_readers, own_endpoints
 from .qos import pub_qos, quiet_pub_events, quiet_sub_events, sub_qos
@@ -344,24 +345,6 @@ def open_spool(base: str, folder, who: str):
         raise NodeConfigError(f"record_spool {one_line(folder)}: {one_line(str(exc.strerror))}") from None
 
 
-def _die_with_parent() -> None:
-    """Nodes started by the launcher end if it is killed outright (no orphans)."""
-    ppid = os.environ.get("HOMEO_PARENT_PID")
-    if not ppid:
-        return
-    try:
-        import ctypes
-
-        libc = ctypes.CDLL("libc.so.6", use_errno=True)
-        # PR_SET_PDEATHSIG: the launcher stops its nodes gracefully; this fires only when it died
-        # without doing so, and then nothing must be left running
-        libc.prctl(1, signal.SIGKILL)
-        if os.getppid() != int(ppid):  # the parent died before prctl
-            os._exit(1)
-    except (OSError, AttributeError, ValueError):
-        pass
-
-
 def config_error_line(exc: Exception) -> str:
     """What a node prints for a bad start-up configuration: one line, whatever value was given."""
     return "error: " + one_line(str(exc).strip())
@@ -402,7 +385,7 @@ def run_node(factory: Callable[[], Node], args=None, config_errors: tuple = ()) 
     exception types that mean a bad start-up configuration."""
     from rclpy.exceptions import ParameterException
 
-    _die_with_parent()
+    die_with_parent()
     # a helper thread (the checkpoint writer, a blocking world's worker) hands the GIL back within
     # 0.5 ms when a message wakes the main thread, not CPython's 5 ms: the tick never waits on it long
     sys.setswitchinterval(SWITCH_INTERVAL_S)

@@ -118,8 +118,9 @@ def add_flag(parser, spec: ParamSpec, default=None, help_extra: str = "") -> Non
 
     eq = f" (Eq {spec.eq})" if spec.eq and spec.eq[0].isdigit() else (f" ({spec.eq})" if spec.eq else "")
     rng = spec.range_text()
-    parser.add_argument(spec.flag, dest=spec.name, type=conv, default=default, metavar=spec.name.upper(),
-                        help=f"{spec.doc}{eq}" + (f"; {rng}" if rng else "") + help_extra)
+    more = {"nargs": "?", "const": True, "metavar": "true|false"} if spec.kind is bool else {"metavar": spec.name.upper()}
+    parser.add_argument(spec.flag, dest=spec.name, type=conv, default=default,  # a bare bool flag says true
+                        help=f"{spec.doc}{eq}" + (f"; {rng}" if rng else "") + help_extra, **more)
 
 
 def markdown_table(specs, defaults: dict | None = None) -> str:

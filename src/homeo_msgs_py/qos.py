@@ -46,3 +46,16 @@ def quiet_sub_events():
     from rclpy.event_handler import SubscriptionEventCallbacks
 
     return SubscriptionEventCallbacks(use_default_callbacks=False)
+
+
+def dds_defaults(env=None) -> dict:
+    """DDS settings of the project, each unless the user set it: discovery on this machine only,
+    and Fast DDS's built-in transports limited to UDP. With discovery on this machine only,
+    rmw_fastrtps (Jazzy) sets its own transports, shared memory and UDP on loopback, and the
+    second setting has no effect (seen: ``dds.shm.*`` threads in every node); it applies when
+    the user widens the range (ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET)."""
+    import os
+
+    env = os.environ if env is None else env
+    return {k: env.get(k, v) for k, v in (("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST"),
+                                          ("FASTDDS_BUILTIN_TRANSPORTS", "UDPv4"))}

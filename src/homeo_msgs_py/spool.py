@@ -1,5 +1,5 @@
 """Recording at the writers: each node appends every message it sends to a file of its own (a
-spool); after the run the launcher merges the spools into the rosbag2 bag (``homeo_launch.record``).
+spool); after the run the launcher merges the spools into the rosbag2 bag (``homeo_record.record``).
 
 Why: a recorder subscribed to every topic costs the launcher 0.6-0.8 ms of DDS receiving a tick
 (docs/GRAPH.md), which on two busy cores lands on the tick; an append costs the writer a few

@@ -145,7 +145,7 @@ class DayHuman(SimHuman):
 
 
 class DayWorld(SimWorld):
-    """The simulated home through a scripted day (registered as ``day``)."""
+    """The simulated home through a scripted day (homeo_sim/days); its result: the day's metrics."""
 
     NAME = "day"
     PARAMS = (ParamSpec("day", "", "the day script: a file, or the name of a shipped day ('' = days/example.json)",
@@ -155,9 +155,9 @@ class DayWorld(SimWorld):
     def check(cls, sc: Scenario, values: dict) -> None:
         load_day(values.get("day"), sc)
 
-    def __init__(self, sc: Scenario, values: dict, ctx=None):
+    def __init__(self, sc: Scenario, values: dict):
         self.human = DayHuman(sc, load_day(values.get("day"), sc), values.get("seed", 0))
-        super().__init__(sc, values, ctx, human=self.human)
+        super().__init__(sc, values, human=self.human)
 
     def finished(self) -> bool:
         return self.human.done

@@ -16,7 +16,8 @@ from __future__ import annotations
 
 from homeo_decision import codec
 from homeo_decision.environment import Outcome
-from homeo_decision.world_api import WorldBackend, WorldConfigError
+from homeo_decision.world_api import LaunchPlan, WorldBackend, WorldConfigError, run_ticks
+from homeo_msgs_py.graph import BAYES, ORACLE
 from homeo_msgs_py.params import ParamSpec
 from homeo_msgs_py.schemas import Rejected
 
@@ -27,6 +28,8 @@ SIM_HUMAN, PERSON = "sim", "person"
 
 
 class SimWorld(WorldBackend):
+    """The simulated world and human of the thesis; its result: Table 4.5's metrics beside the thesis's."""
+
     NAME = "sim"
     PARAMS = (
         ParamSpec("human", SIM_HUMAN, "who plays the human: the simulated one, or a person on homeo/human_input",
@@ -34,10 +37,10 @@ class SimWorld(WorldBackend):
         ParamSpec("human_timeout", 10.0, "seconds a tick waits for the person before it counts as no intention "
                   "(no answer)", 0.01, 3600.0),
     )
-    last_missed = False  # the simulation always acts
+    KEEPS_STATE = SEEDED = True
 
-    def __init__(self, sc, values: dict, ctx=None, human=None):
-        super().__init__(sc, values, ctx)
+    def __init__(self, sc, values: dict, human=None):
+        super().__init__(sc, values)
         seed = values.get("seed", 0)
         self.intention_accuracy = bool(values.get("intention_learns", False))  # score the recognised intention
         self.sample_after = sc.open.metrics_sample == "after_action"
@@ -139,6 +142,40 @@ class SimWorld(WorldBackend):
         self.env.set_state(env)  # last: it checks everything before it changes anything
         self.rec, self.hits = rec, hits
         self._last = None if pending is None else Outcome(None, 0, None, None, None, int(pending[0]), pending[1])
+
+    # -- the front ends: Table 4.5's metrics of the run, beside the thesis's --------------------------
+    @classmethod
+    def plan(cls, sc, given: dict, workdir: str) -> LaunchPlan:
+        plan = super().plan(sc, given, workdir)
+        plan.inputs = ("human_input",) if plan.params.get("human") == PERSON else ()  # a live view may play it
+        return plan
+
+    @classmethod
+    def result(cls, sc, status: dict, setting: dict) -> dict | None:
+        """``homeo-sim run``'s JSON of the run (``restarts`` and the ticks they cost when there were any);
+        None before any tick was measured."""
+        from .cli import run_output
+
+        if not status.get("metrics"):
+            return None
+        out = run_output(run_ticks(status, setting), [setting["seed"]], [status["metrics"]], sc.drive_names)
+        if status.get("restarts"):  # only when there were any: an undisturbed run prints what homeo-sim run prints
+            out.update(restarts=status["restarts"], missed=status.get("missed", 0))
+        return out
+
+    @classmethod
+    def result_text(cls, sc, result: dict, setting: dict) -> str:
+        from .cli import format_table
+
+        how = {ORACLE: "the human's intention observed, as in the thesis's simulation",
+               BAYES: "the intention recognised by the Bayesian network, learning from scratch\n(the thesis "
+                      "observes it: --intention oracle)"}[setting["intention"]]
+        table = format_table(result, sc.drive_names, sc.name, sc.reference.metrics if sc.reference else None)
+        if sc.reference is None:
+            return table
+        return (f"{table}\nsetting: {result['iterations']} iterations, one seed ({setting['seed']}); {how}. The "
+                f"thesis's column\nis a mean over its runs, and one seed scatters around it: homeo-sim run --seeds "
+                f"20 gives ours\nwith 95% intervals (docs/EXPERIMENTS.md, \"One run and many\").")
 
     def rejoin(self, tick: int, lost: int, step_lost) -> dict | None:
         """Time passed while the node was down and nobody acted: ``lost`` ticks stepped without an

@@ -6,5 +6,5 @@
 - ``world_side.PepperWorldSide`` and ``node``: the robot in the graph, on the shared lockstep driver;
 - ``standin.StandinRobot`` / ``homeo-pepper-standin``: a Pepper on loopback for tests and demos.
 
-The field test of Section 4.3 (Tables 4.7, 4.8) is ``homeo_launch.field``. See docs/PEPPER.md.
+The field test of Section 4.3 (Tables 4.7, 4.8) is ``pepper_bridge.field``. See docs/PEPPER.md.
 """

@@ -52,6 +52,7 @@ from typing import Any
 import qi
 
 from homeo_decision.rng import component_rng
+from homeo_msgs_py.cli_args import die_with_parent
 
 from .config import PepperConfig, load_config
 from .mapping import (AUTO_NAOQI, BATTERY_KEY, EMOTION_EVENT, PEOPLE_KEY, PEPPER_JOINTS, PLUGGED_KEY, TOUCH_EVENTS,
@@ -717,6 +718,7 @@ def main(argv=None) -> int:
     ap.add_argument("--naoqi-version", help=f"what ALSystem.systemVersion answers; the user's voices follow its scale "
                                             f"(default: the config's naoqi_version, or {STANDIN_NAOQI} when auto)")
     a = ap.parse_args(argv)
+    die_with_parent()  # started by a launcher: it ends with it
     if a.battery is not None and not 0 <= a.battery <= 100:
         ap.error("--battery must be in [0, 100]")
     if a.time_scale < 0:

@@ -15,6 +15,7 @@ itself lives on the robot, which goes on by itself while the node is down.
 from __future__ import annotations
 
 import json
+from contextlib import contextmanager
 
 from homeo_decision import codec
 from homeo_decision.checkpoint import CheckpointError, check_int
@@ -23,6 +24,7 @@ from homeo_decision.world_api import WorldBackend, WorldConfigError
 from homeo_msgs_py.diagnostics import ERROR, OK, WARN
 from homeo_msgs_py.params import ParamSpec
 
+from . import launch_support
 from .config import DEFAULT_URL
 
 STANDIN_SERVICE = "HomeoStandin"  # the stand-in's control service (not NAOqi; a real robot has none)
@@ -30,8 +32,15 @@ ROW_STR = ("m_dom", "intention", "proposal", "reason", "cue_intention")  # what 
 
 
 class PepperWorld(WorldBackend):
+    """A SoftBank Pepper over NAOqi (a robot at --qi-url, or --standin); its result: the interaction log."""
+
     NAME = "pepper"
-    blocking = True
+    blocking = FAILS_STEPS = DROPS_LINK = True
+    RESETS = False  # the robot's world goes on: a reset starts a new log
+    TICKS = ("interactions", 0)  # 0: until the scripted user is done, or Ctrl-C on a robot
+    INTENTIONS = launch_support.INTENTIONS
+    LAUNCH = launch_support.LAUNCH
+    LOG_HEADER = launch_support.HEADER
     PARAMS = (
         ParamSpec("qi_url", DEFAULT_URL, "NAOqi URL (tcp://host:9559, or tcps://host:9503 with user/password)",
                   fixed=True),
@@ -40,9 +49,10 @@ class PepperWorld(WorldBackend):
         ParamSpec("config", "", "the robot's meaning of the scenario's names ('' = scripts/pepper.json)", fixed=True),
         ParamSpec("battery_source", "memory", "where the battery is read: ALMemory's battery fraction or "
                   "ALBattery.getBatteryCharge", choices=("memory", "albattery"), fixed=True, eq="Sec 4.3.1"),
-        ParamSpec("collect_window", 3.0, "longest wait for the user's reaction (s)", 0.0, 600.0),
+        ParamSpec("collect_window", 3.0, "longest wait for the user's reaction (s; a launch's default: 3 with the "
+                  "stand-in, 8 on a robot)", 0.0, 600.0),
         ParamSpec("collect_quiet", 0.15, "a gap without robot events that ends the wait early (s; = collect_window: "
-                  "wait it out)", 0.0, 600.0),
+                  "wait it out; a launch's default: 0.15 with the stand-in, the whole window on a robot)", 0.0, 600.0),
         ParamSpec("anger_threshold", -1.0, "voice anger level above this is a scolding, on naoqi_version's scale: "
                   "0..10 (NAOqi 2.5+, and auto, rescaled to the robot's) or 0..5 (2.1/2.4) (-1 = the config's)",
                   -1.0, 10.0, eq="Eq 3.22"),
@@ -57,7 +67,7 @@ class PepperWorld(WorldBackend):
         ParamSpec("backoff_max", 10.0, "longest pause between reconnection attempts", 0.1, 600.0, fixed=True),
     )
 
-    def __init__(self, sc, values: dict, ctx=None):
+    def __init__(self, sc, values: dict):
         import qi
 
         from .bridge import PepperBridge
@@ -65,7 +75,7 @@ class PepperWorld(WorldBackend):
         from .environment import PepperEnvironment
         from .mapping import AUTO_NAOQI, emotion_scale
 
-        super().__init__(sc, values, ctx)
+        super().__init__(sc, values)
         v = values
         qi.logging.setLevel(qi.logging.WARNING)
         try:
@@ -96,6 +106,7 @@ class PepperWorld(WorldBackend):
         self.link = self.bridge.status()
         self.log: list = []
         self.user_done = False  # the stand-in's scripted user has no more interactions
+        self.user_log: list = []  # its judgement of each robot action (the stand-in's HomeoStandin.userLog)
         self._standin = None
         self._acting: dict | None = None  # the action message being performed
         self._tick = 0
@@ -127,7 +138,8 @@ class PepperWorld(WorldBackend):
         return {"extra": {"log": list(self.log), "interactions_done": self.env.tick,
                           "robot": {k: link.get(k) for k in ("state", "connected", "reason", "url", "connects", "drops",
                                                              "freezes")},
-                          "robot_missed": sum(1 for r in self.log if r.get("missed")), "naoqi": self.env.bridge.naoqi()}}
+                          "robot_missed": sum(1 for r in self.log if r.get("missed")), "naoqi": self.env.bridge.naoqi(),
+                          **({"user_log": self.user_log} if done and self.user_log else {})}}
 
     def _row(self, action_fields: dict | None) -> None:
         from .environment import MAX_LOG_ROWS
@@ -144,13 +156,15 @@ class PepperWorld(WorldBackend):
         self.last_failure = f"{r['action']} failed: {r.get('reason') or 'no reason given'}" if failed else None
 
     def _standin_user_done(self) -> bool:
-        """The stand-in's scripted user is done (on a real robot there is no such service: False)."""
+        """The stand-in's scripted user is done (on a real robot there is no such service: False); its
+        judgement so far kept for the run's result."""
         session = self.bridge.link.session
         if session is None:
             return False
         try:
             if self._standin is None or self._standin[0] is not session:
                 self._standin = (session, session.service(STANDIN_SERVICE))
+            self.user_log = [dict(r) for r in self._standin[1].userLog()]
             return bool(self._standin[1].state()["user_done"])
         except RuntimeError:
             return False
@@ -158,6 +172,23 @@ class PepperWorld(WorldBackend):
     # -- the run ----------------------------------------------------------------------------------
     def reset(self, seed: int | None) -> None:
         self.log, self.user_done = [], False  # the robot's world goes on: a new run only restarts the log
+
+    # -- the front ends (launch_support) --------------------------------------------------------------
+    @classmethod
+    def plan(cls, sc, given: dict, workdir: str):
+        return launch_support.plan(sc, given, workdir, cls.PARAMS)
+
+    @classmethod
+    def log_line(cls, row: dict) -> str:
+        return launch_support.row_line(row)
+
+    @classmethod
+    def result(cls, sc, status: dict, setting: dict) -> dict | None:
+        return launch_support.result(sc, status, setting)
+
+    @classmethod
+    def result_text(cls, sc, result: dict, setting: dict) -> str:
+        return launch_support.result_text(sc, result, setting)
 
     def ready(self) -> list[str]:
         if self.bridge.link.connected:
@@ -241,6 +272,22 @@ class PepperWorld(WorldBackend):
 
     def close(self) -> None:
         self.bridge.stop()
+
+    @classmethod
+    @contextmanager
+    def test_double(cls, sc, values: dict):
+        """A stand-in Pepper over a real libqi session on loopback, time frozen, with the field test's
+        scripted user; it drops its link on request (``StandinRobot.drop_for``)."""
+        from .config import load_config
+        from .standin import StandinRobot
+        from .user import load_script
+
+        robot = StandinRobot(load_config(values["config"] or None, scenario=sc), load_script("field_user.json"),
+                             seed=values["seed"], time_scale=0.0, scenario=sc)
+        try:
+            yield dict(values, qi_url=robot.start(), collect_window=2.0, collect_quiet=0.15), robot.drop_for
+        finally:
+            robot.close()
 
     # -- the run's checkpoint ---------------------------------------------------------------------
     def state(self) -> tuple[None, dict]:

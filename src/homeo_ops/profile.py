@@ -51,7 +51,10 @@ CATEGORIES = (
                   "rclpy/guard_condition.py", "rclpy/waitable.py", "rclpy/__init__.py", "contextlib.py")),
 )
 ORDER = tuple(c for c, _ in CATEGORIES[:-1]) + (GLUE, OTHER, "executor", WAITING)
-HOMEO_CODE = ("(homeo_msgs_py/", "(homeo_decision/", "(homeo_intention/", "(homeo_sim/", "(pepper_bridge/")
+# the project's own code that nodes run: its packages of layers 1-4, whichever worlds are installed
+HOMEO_CODE = tuple(f"({p.name}/" for p in Path(__file__).resolve().parents[1].iterdir()
+                   if (p / "__init__.py").is_file() and p.name not in ("homeo_launch", "homeo_record", "homeo_ops",
+                                                                       "homeo_topic"))
 IDLE_LEAVES = ("threading.py", "queue.py")  # a helper thread's waits: not work
 
 

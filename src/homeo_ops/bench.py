@@ -23,11 +23,11 @@ import time
 
 from homeo_msgs_py.graph import ORACLE
 
-from ..launch import GraphOptions, run_graph, sim_options
+from homeo_launch.launch import GraphOptions, run_graph, sim_options
 from . import profile
-from ..monitor import GraphError
-from ..processes import Graph, NodeSpec, graph_env
-from ..tap import Tap
+from homeo_launch.monitor import GraphError
+from homeo_launch.processes import Graph, NodeSpec, graph_env
+from homeo_record.tap import Tap
 
 HOPS = 6  # publish-receive hops per tick in the graph (see above)
 CRITICAL_HOPS = 4
@@ -35,7 +35,7 @@ CRITICAL_HOPS = 4
 
 def floor_s_per_tick(iterations: int, hops: int = HOPS, bound_s: float = 120.0) -> float:
     # each process declares node name homeo_floor: renamed so that its parameters file applies
-    specs = [NodeSpec(f"homeo_floor_{i}", "homeo_launch.ops.floor_chain",
+    specs = [NodeSpec(f"homeo_floor_{i}", "homeo_ops.floor_chain",
                       {"index": i, "hops": hops, "iterations": iterations},
                       args=["--ros-args", "-r", f"__node:=homeo_floor_{i}"]) for i in range(hops)]
     graph = Graph(specs, graph_env(), auth=False)  # the floor: raw rclpy, nothing signed
@@ -102,8 +102,8 @@ def recorded_run(iterations: int, record_from: str = "writers") -> dict:
 
     from homeo_decision.scenario import load_scenario
 
-    from ..record import new_bag, run_info
-    from ..tap import tapped_topics
+    from homeo_record.record import new_bag, run_info
+    from homeo_record.tap import tapped_topics
 
     with tempfile.TemporaryDirectory(prefix="homeo-bench-bag-") as tmp:
         sink = new_bag(Path(tmp) / "bag", run_info("sim", iterations, 0, load_scenario(), {}), tapped_topics(),

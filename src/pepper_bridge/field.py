@@ -9,9 +9,14 @@ config's cues name, the perception, the decision with the loaded Q-table) in a
 nodes host, stepped by ``run_loop`` until the scripted user is done.
 The tick count continues after the simulated training (``t0`` = 5000).
 
+With ``--graph`` each robot runs through the node graph instead, as a user starts it: the generic
+front end, ``homeo-launch pepper --standin --script S --load-q Q --dod D --json`` (a command, not an
+import: the launcher is a layer above).
+
 CLI (``homeo-pepper-field``)::
 
     homeo-pepper-field --script field_user.json --seeds 0 1 2 [--q-dedicated F --q-selfish F | --same-q F] [--json]
+    homeo-pepper-field --graph --script field_user.json --seeds 0 ...
 """
 
 from __future__ import annotations
@@ -52,11 +57,21 @@ def make_robot(sc: Scenario, dod: float, seed: int, q_table: str | Path | None) 
     return Robot(sc, core, OracleRecognition(sc))
 
 
+def _command(*argv: str, timeout: float = 900.0) -> str:
+    """Another command of the project (the simulation, the launcher: layers this one does not import);
+    its standard output, or RuntimeError with its last words."""
+    import subprocess
+
+    r = subprocess.run([sys.executable, "-m", *argv], capture_output=True, text=True, timeout=timeout)
+    if r.returncode != 0:
+        raise RuntimeError(f"{' '.join(argv[:2])} failed ({r.returncode}): {r.stderr.strip()[-400:]}")
+    return r.stdout
+
+
 def train_q(path: str | Path, dod: float | None = None, seed: int = 0, iterations: int = TRAIN_ITERATIONS) -> Path:
     """The Q-table at the end of the default simulation (``homeo-sim run --seed 0 --save-q``)."""
-    from homeo_sim.runner import RunConfig, run_episode
-
-    run_episode(RunConfig(iterations=iterations, seed=seed, dod=dod, save_q=str(path)))
+    _command("homeo_sim.cli", "run", "--iterations", str(iterations), "--seed", str(seed), "--save-q", str(path),
+             "--quiet", "--json", *(["--dod", repr(float(dod))] if dod is not None else []))
     return Path(path)
 
 
@@ -133,44 +148,17 @@ def run_field(script: str | Path | dict, dod: float, seed: int, q_table: str | P
     return res
 
 
-# -- the field test through the graph (homeo-launch pepper --field) ---------------------------
-def field_result(run: dict, seed: int, default_dod: float | None = None, a=None) -> FieldResult:
-    """A graph run of ``homeo_launch.pepper.run_robot`` as a FieldResult (the charging roles of the
-    run's config and scenario, from its arguments ``a``)."""
-    log = (run["status"].get("extra") or {}).get("log") or []
-    dod = run[DOD.name] if run[DOD.name] is not None else default_dod
-    roles = {}
-    if a is not None:
-        sc = load_scenario(a.scenario)
-        roles = charging_roles(load_config(a.config, scenario=sc), sc)
-    return FieldResult(run["label"], dod, seed, log=list(log), user_log=list(run["user_log"]), roles=roles)
-
-
-def cmd_field_graph(a, base: Path, run_robot) -> int:
-    """Both robots through the graph, each with its own stand-in; their tables side by side."""
-    from .launch import PROG
-
-    tables = {}
-    for label, dod in DODS:
-        given = a.q_table or (a.q_dedicated if label == "dedicated" else a.q_selfish)
-        if not given:
-            print(f"{PROG}: training the {label} robot's Q-table ({TRAIN_ITERATIONS} simulated iterations, seed 0, "
-                  f"DoD {dod})", file=sys.stderr)
-            given = str(train_q(Path(a.data_dir) / "field" / f"q_{label}.json", dod))  # kept: the node reads it there
-        tables[label] = given
-    results = []
-    for label, dod in DODS:
-        d = base / label
-        d.mkdir(exist_ok=True)
-        if not a.json and not a.quiet:
-            print(f"{PROG}: {label} robot (DoD {dod}) through the graph", file=sys.stderr)
-        results.append(field_result(run_robot(a, label, dod, tables[label], d), a.seed, a=a))
-    if a.json:
-        print(json.dumps({"seed": a.seed, "robots": [{"summary": r.summary(), "log": r.log} for r in results]},
-                         indent=1))
-    else:
-        print(side_by_side(*results))
-    return 0
+# -- the field test through the graph ---------------------------------------------------------
+def run_graph_field(script: str, dod: float, seed: int, q_table: str, *, label: str = "", config: str | None = None,
+                    scenario: Scenario | None = None) -> FieldResult:
+    """One robot through the node graph, against its own stand-in with the scripted user: the launcher's
+    ``homeo-launch pepper`` with ``--json``, as a user runs it."""
+    sc = scenario or load_scenario()
+    out = json.loads(_command("homeo_launch.cli", "pepper", "--standin", "--script", str(script), "--load-q",
+                              str(q_table), "--dod", repr(float(dod)), "--seed", str(seed), "--json", "--quiet",
+                              *(["--config", config] if config else [])))
+    return FieldResult(label, dod, seed, log=out["log"], user_log=out.get("user_log", []),
+                       roles=charging_roles(load_config(config, scenario=sc), sc))
 
 
 # -- tables -------------------------------------------------------------------------
@@ -212,6 +200,8 @@ def main(argv=None) -> int:
     ap.add_argument("--same-q", metavar="FILE", help="one Q-table for both robots (only the DoD of their reward differs)")
     ap.add_argument("--config", help="places/phrases file (default scripts/pepper.json)")
     ap.add_argument("--json", action="store_true", help="print the interaction logs and summaries as JSON")
+    ap.add_argument("--graph", action="store_true", help="each robot through the node graph (homeo-launch pepper), "
+                                                         "not in-process")
     a = ap.parse_args(argv)
     qi.logging.setLevel(qi.logging.ERROR)
     sc = load_scenario()
@@ -223,7 +213,8 @@ def main(argv=None) -> int:
             tables[label] = given or str(train_q(Path(tmp) / f"q_{label}.json", dod))
         out = []
         for seed in a.seeds:
-            pair = [run_field(a.script, dod, seed, tables[label], label=label, config=cfg, scenario=sc)
+            pair = [run_graph_field(a.script, dod, seed, tables[label], label=label, config=a.config, scenario=sc)
+                    if a.graph else run_field(a.script, dod, seed, tables[label], label=label, config=cfg, scenario=sc)
                     for label, dod in DODS]
             out.append(pair)
             if not a.json:

@@ -49,7 +49,7 @@ class _Ros:
         import rclpy
         from rclpy.signals import SignalHandlerOptions
 
-        from .processes import dds_defaults
+        from homeo_msgs_py.qos import dds_defaults
 
         os.environ.update(dds_defaults())
         rclpy.init(signal_handler_options=SignalHandlerOptions.NO)

@@ -34,7 +34,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from ..procfs import stat_fields
+from homeo_record.procfs import stat_fields
 
 SAMPLES = 40  # memory samples over a run
 
@@ -206,13 +206,13 @@ def _summary(mem, cpu, n) -> dict:
 
 def soak_bus(ticks: int, seed: int = 0, progress=None) -> dict:
     """The graph's own code without DDS: the world host and the three robot nodes' hosts in this
-    process (``homeo_launch.bus``, unshuffled), every message encoded, decoded and joined as the
+    process (``homeo_ops.bus``, unshuffled), every message encoded, decoded and joined as the
     nodes do. Tells the code's cost apart from rclpy's and the machine's."""
     from homeo_decision.scenario import load_scenario
     from homeo_msgs_py.graph import BAYES
     from homeo_sim.world_backend import SimWorld
 
-    from ..bus import BusGraph
+    from .bus import BusGraph
 
     sc = load_scenario()
     world = SimWorld(sc, {"seed": seed, "intention_learns": True})
@@ -343,7 +343,7 @@ def soak_graph(ticks: int, seed: int = 0, progress=None, fresh: int = 0, fresh_d
     """``fresh``: also run a fresh graph of that many ticks beside the long run near its start and
     again near its end (on ROS domain ``fresh_domain``), and compare the cost per tick over the same
     minutes (``side_by_side``): the long run's growth with the machine's drift taken out."""
-    from ..launch import run_graph, sim_options
+    from homeo_launch.launch import run_graph, sim_options
 
     times: list = []
     mem: dict = {}

@@ -1,6 +1,6 @@
 """A Foxglove layout for a live run (``--foxglove``), built from a scenario's names.
 
-``python -m homeo_launch.foxglove_layout [SCENARIO] > docs/foxglove-layout.json`` writes the one in
+``python -m homeo_record.foxglove_layout [SCENARIO] > docs/foxglove-layout.json`` writes the one in
 the repository (the thesis scenario; tests/test_live.py checks it is current). Panels: drives with
 their thresholds, intensities, the dominant motivation over time, HSR and RSR of the run so far,
 the interaction (action, feedback, proposal) and a Publish panel that plays the human

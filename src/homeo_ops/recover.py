@@ -17,7 +17,7 @@ from homeo_msgs_py import data_dir
 from homeo_msgs_py.cli_args import UserError
 from homeo_msgs_py.schemas import one_line
 
-from ..record import SPOOL_PREFIX, NotRecovered, proc_start, read_manifest, spools_to_bag
+from homeo_record.record import SPOOL_PREFIX, NotRecovered, proc_start, read_manifest, spools_to_bag
 
 def add_parser(sub) -> None:
     r = sub.add_parser("recover", help="write the bags of recordings whose launcher was killed outright "

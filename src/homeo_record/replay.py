@@ -41,11 +41,19 @@ def interaction_log(run: RecordedRun) -> list[dict]:
     return rows
 
 
-def metrics_output(run: RecordedRun) -> dict:
-    from homeo_sim.cli import run_output
+def world_result(run: RecordedRun) -> tuple:
+    """The world's result as the run printed it (``WorldBackend.result`` of the recorded final run status),
+    the world found by its name in the registry; ``(class, setting, result)``."""
+    from homeo_decision.world_api import world_class
 
     info = run.info
-    return run_output(info["iterations"], [info["seed"]], [run.final_status()["metrics"]], run.sc.drive_names)
+    cls = world_class(info["graph"])
+    setting = {"seed": info["seed"], "iterations": info["iterations"], "learning": {}, "values": {},
+               "intention": info.get("intention") or next(iter(cls.INTENTIONS.values())), "interrupted": False}
+    out = cls.result(run.sc, run.final_status(), setting)
+    if out is None:
+        raise BagError(f"{run.path}: the recorded run has no result yet")
+    return cls, setting, out
 
 
 def _log_line(r: dict) -> str:
@@ -141,15 +149,17 @@ def run_cli(a) -> int:
         res = evaluate(run, a.policy, given)
         print(json.dumps(res) if a.json else format_eval(res))
         return 0
-    from homeo_sim.cli import format_table
-    from homeo_sim.stats import json_safe
+    from homeo_decision.world_api import WorldConfigError
+    from homeo_msgs_py.schemas import finite
 
-    out = metrics_output(run)
+    try:
+        cls, setting, out = world_result(run)
+    except WorldConfigError as exc:
+        raise BagError(f"{a.bag}: {exc}") from None
     if a.json:
-        print(json.dumps(json_safe(out)))
+        print(json.dumps(finite(out)))
     else:
-        sc = run.sc
-        print(format_table(out, sc.drive_names, sc.name))
+        print(cls.result_text(run.sc, out, setting))
         rows = interaction_log(run)
         fb = [r["feedback"] for r in rows]
         print(f"interaction: {len(rows)} ticks, {sum(r['intention'] not in (None, 'none') for r in rows)} with a wish, "
