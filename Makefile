@@ -8,7 +8,7 @@ PY     := $(shell $(PYTHON) -c 'import sys; print(sys.executable)' 2>/dev/null |
             (v=$$(pyenv versions --bare 2>/dev/null | grep -E "^$(subst python,,$(PYTHON))(\.|$$)" | tail -n 1); \
              [ -n "$$v" ] && echo "$$(pyenv prefix $$v)/bin/python"))
 # the real ros2 command line and launch system (wheels of their Jazzy sources), for the workspace tests
-ROS2_TOOLS ?= $(firstword $(wildcard ../shared/ros2-tools /work/shared/ros2-tools))
+ROS2_TOOLS ?= $(wildcard ../shared/ros2-tools)
 
 .PHONY: setup run test test-core test-py312 ros2-tools bench report calibrate-setup profile-setup clean
 

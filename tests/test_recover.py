@@ -198,7 +198,8 @@ def test_a_launcher_killed_outright_leaves_a_folder_that_recover_turns_into_a_re
     assert len(actions) >= 50 and actions == list(range(len(actions)))
     r = subprocess.run([sys.executable, "-m", "homeo_record.replay", bag, "--json"], capture_output=True, text=True,
                        timeout=120)
-    assert r.returncode == 0 and json.loads(r.stdout)["iterations"] == 0, r.stderr
+    # the world's result of the last recorded status: the ticks the unbounded run had reached when it was killed
+    assert r.returncode == 0 and 0 < json.loads(r.stdout)["iterations"] <= len(actions), r.stderr
 
 
 @settings(max_examples=100, deadline=None)

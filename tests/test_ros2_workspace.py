@@ -63,7 +63,7 @@ def test_the_package_and_every_node_executable_are_found(ws, env):
     assert {n.executable for n in NODES.values()} | {"homeo-launch", "homeo-sim", "homeo-topic"} <= found, r.stdout
     prefix = Path(ros2cli.run(ws, f"ros2 pkg prefix {ros2cli.PACKAGE}", env).stdout.strip())
     share = prefix / "share" / ros2cli.PACKAGE
-    assert {p.name for p in (share / "launch").iterdir()} == {"sim.launch.py", "pepper.launch.py"}
+    assert {p.name for p in (share / "launch").iterdir()} == {"world.launch.py", "sim.launch.py", "pepper.launch.py"}
     assert {p.name for p in (share / "config").iterdir()} == {"params.yaml", "pepper.yaml"}
 
 

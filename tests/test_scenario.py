@@ -237,7 +237,7 @@ def test_missing_file(tmp_path):
 def test_malformed_json(tmp_path):
     path = tmp_path / "bad.json"
     path.write_text('{"schema": "homeo-scenario", "version": 1,')
-    with pytest.raises(ScenarioError, match="not valid JSON"):
+    with pytest.raises(ScenarioError, match="corrupt scenario .not JSON: .* at line 1"):
         load_scenario(path)
 
 

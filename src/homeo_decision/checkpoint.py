@@ -19,11 +19,11 @@ from __future__ import annotations
 import copy
 import hashlib
 import json
-import math
 import os
 from pathlib import Path
 
 from homeo_msgs_py.learning import LEARNING, SEED
+from homeo_msgs_py.params import number
 
 from . import jsonfile, qtable_io
 from .objectq import ObjectQ
@@ -105,16 +105,12 @@ def check_codes(saved, ours: str, where: str) -> None:
         raise CheckpointError(f"{where}: a checkpoint whose world codes this program would misread ({why})")
 
 
-def check_int(v, what: str, lo: int = 0, hi: int = 2**62) -> int:
-    if type(v) is not int or not lo <= v <= hi:
-        raise CheckpointError(f"{what} must be an integer in {lo}..{hi}, got {str(v)[:40]!r}")
-    return v
-
-
-def check_number(v, what: str, lo: float, hi: float) -> float:
-    if type(v) not in (int, float) or not math.isfinite(v) or not lo <= v <= hi:
-        raise CheckpointError(f"{what} must be a number in {lo:g}..{hi:g}, got {str(v)[:40]!r}")
-    return float(v)
+def check_int(v, what: str, lo: int = 0, hi: int = 2**62, kind: type = int):
+    """A checkpoint's number, checked by its declaration (``params.number``); CheckpointError (one line)."""
+    try:
+        return number(lo, hi, kind).check(v)
+    except ValueError as exc:
+        raise CheckpointError(f"{what} {exc}") from None
 
 
 def check_world_position(pos, sc, voc, where: str, world_tick: int | None = None) -> dict:
@@ -125,7 +121,7 @@ def check_world_position(pos, sc, voc, where: str, world_tick: int | None = None
         run, tick = check_int(pos.get("run"), "run"), check_int(pos.get("tick"), "tick", 0, 10**9)
         out = {"run": run, "tick": tick, "missed": check_int(pos.get("missed"), "missed", 0, tick),
                "iterations": check_int(pos.get("iterations"), "iterations", 0, 10**9),
-               "elapsed": check_number(pos.get("elapsed"), "elapsed", 0.0, 1e9), "outcome": None}
+               "elapsed": check_int(pos.get("elapsed"), "elapsed", 0.0, 1e9, float), "outcome": None}
         for key in ("done", "started"):
             if type(pos.get(key)) is not bool:
                 raise CheckpointError(f"{key} must be true or false")

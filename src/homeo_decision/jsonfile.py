@@ -51,14 +51,26 @@ def _fsync_dir(d: Path) -> None:
         os.close(fd)
 
 
-def read(path: str | Path, error: type[Exception], what: str):
-    """The parsed JSON of ``path``; a missing, unreadable or corrupt file raises ``error``."""
+def shipped(path: str | Path, folder: Path) -> Path:
+    """``path``, or for a bare name that is no file here (``example``, ``field_user.json``) the file
+    ``NAME.json`` or ``NAME`` shipped with the package in ``folder``."""
+    p = Path(path)
+    if not p.exists() and p.parent == Path(".") and str(p):
+        p = next((q for q in (folder / f"{p}.json", folder / p.name) if q.is_file()), p)
+    return p
+
+
+def read(path: str | Path, error: type[Exception], what: str, limit: int = 64 << 20):
+    """The parsed JSON of ``path``; a missing, unreadable, too large or corrupt file (a folder too) raises
+    ``error`` in one line."""
     p = Path(path)
     try:
+        if p.stat().st_size > limit:
+            raise error(f"{what} {p}: larger than {limit} bytes")
         return json.loads(p.read_text())
     except FileNotFoundError:
         raise error(f"{what} file not found: {p}") from None
     except (OSError, UnicodeDecodeError) as exc:
-        raise error(f"cannot read {what} {p}: {exc}") from None
+        raise error(f"cannot read {what} {p}: {getattr(exc, 'strerror', None) or exc}") from None
     except json.JSONDecodeError as exc:
         raise error(f"{p}: corrupt {what} (not JSON: {exc.msg} at line {exc.lineno})") from None

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 
 
 class UserError(Exception):
@@ -19,32 +18,16 @@ class Parser(argparse.ArgumentParser):
 
 
 def int_at_least(lo: int, hi: int | None = None):
-    """An integer >= lo (and <= hi: a node's parameter range, checked before anything starts)."""
-    def conv(s: str) -> int:
-        try:
-            v = int(s) if len(s) <= 30 else None
-        except ValueError:
-            v = None
-        if v is None:
-            raise argparse.ArgumentTypeError(f"{s[:32]!r} is not an integer")
-        if v < lo:
-            raise argparse.ArgumentTypeError(f"{v} is below the minimum {lo}")
-        if hi is not None and v > hi:
-            raise argparse.ArgumentTypeError(f"{v} is above the maximum {hi}")
-        return v
-    return conv
+    """An integer >= lo (and <= hi), checked by its declaration (``params.ParamSpec``)."""
+    from .params import arg_type, number
+
+    return arg_type(number(lo, hi))
 
 
 def float_in(lo: float, hi: float):
-    def conv(s: str) -> float:
-        try:
-            v = float(s)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{s!r} is not a number") from None
-        if not (lo <= v <= hi) or math.isnan(v):
-            raise argparse.ArgumentTypeError(f"{v} is outside [{lo}, {hi}]")
-        return v
-    return conv
+    from .params import arg_type, number
+
+    return arg_type(number(lo, hi, float))
 
 
 def user_path(s: str) -> str:

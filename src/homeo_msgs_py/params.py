@@ -51,15 +51,17 @@ class ParamSpec:
             value = float(value)
         if t is tuple and isinstance(value, list):
             value = tuple(value)
+        who = f"{self.name} " if self.name else ""  # a nameless spec: a value argparse or a caller names
         if type(value) is not t or (t is tuple and not all(type(x) is str for x in value)):
-            raise ValueError(f"{self.name} must be {_type_name(t)}, not {_shown(value)}")
+            raise ValueError(f"{who}must be {_type_name(t)}, not {_shown(value)}")
         if t in (int, float):
             if t is float and not math.isfinite(value):
-                raise ValueError(f"{self.name} must be a finite number, not {value!r}")
+                raise ValueError(f"{who}must be a finite number, not {value!r}")
             if (self.lo is not None and value < self.lo) or (self.hi is not None and value > self.hi):
-                raise ValueError(f"{self.name} = {value!r} is outside {self.range_text()}")
+                raise ValueError(f"{who}= {value!r} is outside {self.range_text()}" if who else
+                                 f"{value!r} is outside {self.range_text()}")
         if self.choices and value not in self.choices:
-            raise ValueError(f"{self.name} must be one of {', '.join(self.choices)}, not {_shown(value)}")
+            raise ValueError(f"{who}must be one of {', '.join(self.choices)}, not {_shown(value)}")
         return value
 
     def range_text(self) -> str:
@@ -78,7 +80,7 @@ class ParamSpec:
         if t is bool:
             low = text.strip().lower()
             if low not in ("true", "false", "1", "0", "yes", "no"):
-                raise ValueError(f"{self.name} must be true or false, not {_shown(text)}")
+                raise ValueError(f"{self.name + ' ' if self.name else ''}must be true or false, not {_shown(text)}")
             return self.check(low in ("true", "1", "yes"))
         if t in (int, float):
             try:
@@ -86,7 +88,7 @@ class ParamSpec:
             except ValueError:
                 v = None
             if v is None:
-                raise ValueError(f"{self.name} must be {_type_name(t)}, not {_shown(text)}")
+                raise ValueError(f"{self.name + ' ' if self.name else ''}must be {_type_name(t)}, not {_shown(text)}")
             return self.check(v)
         if t is tuple:
             return self.check(tuple(x for x in text.split(",") if x))
@@ -105,9 +107,8 @@ def _shown(value) -> str:
     return one_line(text if len(text) <= 40 else text[:37] + "...")
 
 
-def add_flag(parser, spec: ParamSpec, default=None, help_extra: str = "") -> None:
-    """An argparse option for ``spec`` (``--dod``); its value is checked by ``spec.parse``.
-    ``default``: the option's default (None: not given, the node's or scenario's default applies)."""
+def arg_type(spec: ParamSpec):
+    """An argparse ``type`` that checks a command-line value by ``spec`` (one line when it refuses)."""
     import argparse
 
     def conv(text: str):
@@ -115,6 +116,18 @@ def add_flag(parser, spec: ParamSpec, default=None, help_extra: str = "") -> Non
             return spec.parse(text)
         except ValueError as exc:
             raise argparse.ArgumentTypeError(str(exc)) from None
+    return conv
+
+
+def number(lo: float | None, hi: float | None = None, kind: type = int) -> ParamSpec:
+    """A nameless number in [lo, hi] (a command-line count, a checkpoint's field): ``.check`` or ``arg_type``."""
+    return ParamSpec("", kind(lo if lo is not None else 0), "", lo, hi)
+
+
+def add_flag(parser, spec: ParamSpec, default=None, help_extra: str = "") -> None:
+    """An argparse option for ``spec`` (``--dod``); its value is checked by ``spec.parse``.
+    ``default``: the option's default (None: not given, the node's or scenario's default applies)."""
+    conv = arg_type(spec)
 
     eq = f" (Eq {spec.eq})" if spec.eq and spec.eq[0].isdigit() else (f" ({spec.eq})" if spec.eq else "")
     rng = spec.range_text()

@@ -19,7 +19,6 @@ With ``repeat`` the day starts over after its last moment; without, the world is
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from homeo_decision.scenario import NONE_INTENTION, Scenario
@@ -43,19 +42,10 @@ class DayScriptError(WorldConfigError):
 def load_day(path: str | None, sc: Scenario) -> dict:
     """The checked day script at ``path`` ('' or None: the shipped ``days/example.json``; a bare name:
     a shipped day). Raises DayScriptError (one line)."""
-    p = Path(path) if path else DAYS_DIR / "example.json"
-    if path and not p.exists() and not p.suffix and (DAYS_DIR / f"{path}.json").is_file():
-        p = DAYS_DIR / f"{path}.json"
-    try:
-        if p.stat().st_size > MAX_BYTES:
-            raise DayScriptError(f"day script {p}: larger than {MAX_BYTES} bytes")
-        raw = json.loads(p.read_text())
-    except FileNotFoundError:
-        raise DayScriptError(f"day script not found: {p}") from None
-    except OSError as exc:
-        raise DayScriptError(f"day script {p}: {exc.strerror}") from None
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise DayScriptError(f"day script {p}: not JSON ({str(exc).splitlines()[0][:80]})") from None
+    from homeo_decision.jsonfile import read, shipped
+
+    p = shipped(path or "example", DAYS_DIR)
+    raw = read(p, DayScriptError, "day script", limit=MAX_BYTES)
     return check_day(raw, sc, str(p))
 
 

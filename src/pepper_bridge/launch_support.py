@@ -14,7 +14,6 @@ class methods (``world_backend.PepperWorld``), written here once for ``homeo-lau
 
 from __future__ import annotations
 
-import copy
 import json
 import socket
 import sys
@@ -90,11 +89,11 @@ def plan(sc, given: dict, workdir: str, params: tuple) -> LaunchPlan:
 
 def script_path(s: str) -> Path:
     """A scripted user: a path, or the name of a shipped script (pepper_bridge/scripts/)."""
+    from homeo_decision.jsonfile import shipped
+
     from .config import SCRIPTS_DIR
 
-    p = Path(s)
-    if not p.exists() and not p.is_absolute() and (SCRIPTS_DIR / p).exists():
-        p = SCRIPTS_DIR / p
+    p = shipped(s, SCRIPTS_DIR)
     if not p.is_file():
         raise WorldConfigError(f"user script not found: {s}")
     return p.resolve()
@@ -113,7 +112,10 @@ def _last_phase(scenario: str | None, workdir: Path) -> str:
     """The scenario with its learning schedule reduced to the last phase, written into ``workdir``."""
     from homeo_decision.scenarios import default_scenario_path
 
-    raw = copy.deepcopy(json.loads(Path(scenario or default_scenario_path()).read_text()))
+    from homeo_decision.jsonfile import read
+    from homeo_decision.scenario import ScenarioError
+
+    raw = read(scenario or default_scenario_path(), ScenarioError, "scenario")
     raw["learning"]["schedule"] = [dict(raw["learning"]["schedule"][-1], **{"from": 0})]
     dst = workdir / "scenario.json"
     dst.write_text(json.dumps(raw))

@@ -203,19 +203,13 @@ def timed_entry_emits(entry: Mapping[str, Any], gesture_event: str, movement_eve
 
 
 def load_script(path: str | Path) -> dict:
-    p = Path(path)
-    if not p.exists() and not p.is_absolute():
-        from .config import SCRIPTS_DIR
+    """A scripted user's file (a path, or the name of a file of ``scripts/``), checked (ScriptError)."""
+    from homeo_decision.jsonfile import read, shipped
 
-        if (SCRIPTS_DIR / p).exists():
-            p = SCRIPTS_DIR / p
-    try:
-        raw = json.loads(p.read_text())
-    except FileNotFoundError:
-        raise ScriptError(f"user script not found: {p}") from None
-    except json.JSONDecodeError as exc:
-        raise ScriptError(f"{p}: not valid JSON (line {exc.lineno}: {exc.msg})") from None
-    return validate_script(raw, str(p))
+    from .config import SCRIPTS_DIR
+
+    p = shipped(path, SCRIPTS_DIR)
+    return validate_script(read(p, ScriptError, "user script"), str(p))
 
 
 def validate_script(raw: Any, where: str = "<memory>", intentions: tuple | None = None) -> dict:

@@ -7,7 +7,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -31,23 +30,10 @@ def load_scenario(path: str | Path | None = None, overrides: Mapping[str, Any] |
     ``workshop`` is a file shipped in ``homeo_decision/scenarios``)."""
     from homeo_decision.scenarios import SCENARIO_DIR, default_scenario_path
 
-    if path is None:
-        path = default_scenario_path()
-    p = Path(path)
-    if not p.exists() and p.name == str(path) and not p.suffix and (SCENARIO_DIR / f"{p}.json").is_file():
-        p = SCENARIO_DIR / f"{p}.json"  # a bare name: a scenario shipped with the package
-    try:
-        text = p.read_text()
-    except FileNotFoundError:
-        raise ScenarioError(f"scenario file not found: {p}") from None
-    except OSError as exc:
-        raise ScenarioError(f"cannot read scenario file {p}: {exc.strerror}") from None
-    except UnicodeDecodeError:
-        raise ScenarioError(f"{p}: not a text (UTF-8) file") from None
-    try:
-        raw = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise ScenarioError(f"{p}: not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})") from None
+    from homeo_decision.jsonfile import read, shipped
+
+    p = shipped(path if path is not None else default_scenario_path(), SCENARIO_DIR)  # a bare name: a shipped one
+    raw = read(p, ScenarioError, "scenario")
     return scenario_from_dict(raw, source=str(p), overrides=overrides)
 
 

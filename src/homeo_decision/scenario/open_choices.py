@@ -11,7 +11,9 @@ unchanged; ``table()`` is docs/FIDELITY.md's table of the choices (a test compar
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields
-from typing import Any, Mapping, Sequence
+from typing import Any, Callable, Mapping, Sequence
+
+from homeo_msgs_py.params import ParamSpec, number
 
 from .model import HUMAN_VARS, NO_MOTIVATION, ScenarioError
 
@@ -33,54 +35,50 @@ class Names:
     serving: str
 
 
-# -- what a choice may take -----------------------------------------------------------------------
-class Between:
+# -- what a choice may take: a declaration (``homeo_msgs_py.params.ParamSpec``, the one validator of a typed
+# value), and for a choice that names the scenario's things, the names it may take ------------------------
+@dataclass(frozen=True)
+class Allowed:
+    spec: ParamSpec  # its type and range or choices
+    names: Callable | None = None  # (value, Names) -> the names it may also or only take, or None: any
+    shown: str = ""  # what the docs table says it takes, when the declaration alone cannot
+
+    def check(self, key: str, val, names: Names):
+        extra = self.names(names) if self.names is not None else ()
+        try:
+            if self.spec.kind is str and isinstance(val, str) and val in extra:
+                return val
+            if isinstance(val, (list, tuple)) and self.spec.kind is tuple:
+                val = tuple(val)
+                if not set(val) <= set(extra) or len(set(val)) != len(val):
+                    raise ValueError(f"must be a list of distinct action names: {', '.join(sorted(extra))}")
+            return self.spec.check(val)
+        except ValueError as exc:
+            raise ValueError(f"open.{key} {exc}" + (f" (or one of {', '.join(sorted(extra))})" if extra and
+                                                    self.spec.kind is str else "")) from None
+
+    def text(self) -> str:
+        s = self.spec
+        return self.shown or s.range_text().replace("|", "\\|") or ("true \\| false" if s.kind is bool else "")
+
+
+def Between(lo: float, hi: float) -> Allowed:  # noqa: N802 - reads as a type in the declarations below
     """Any number in [lo, hi] (kept as a float)."""
-
-    def __init__(self, lo: float, hi: float):
-        self.lo, self.hi = lo, hi
-
-    def check(self, key: str, val, names: Names):
-        if not isinstance(val, (int, float)) or isinstance(val, bool) or not self.lo <= val <= self.hi:
-            raise ValueError(f"open.{key} = {val!r} must be a number in [{self.lo}, {self.hi}]")
-        return float(val)
-
-    def text(self) -> str:
-        return f"[{self.lo:g}, {self.hi:g}]"
+    return Allowed(number(lo, hi, float))
 
 
-class OneOf:
+def OneOf(*values, any_action: bool = False) -> Allowed:  # noqa: N802
     """One of ``values`` (strings, or True and False); ``any_action``: or an action name of the scenario."""
-
-    def __init__(self, *values, any_action: bool = False):
-        self.values, self.any_action = values, any_action
-
-    def check(self, key: str, val, names: Names):
-        if self.any_action:
-            if not isinstance(val, str) or (val not in self.values and val not in names.actions):
-                raise ValueError(f"open.{key} = {val!r} must be one of {list(self.values)} or an action name "
-                                 f"({', '.join(sorted(names.actions))})")
-        elif val not in self.values or isinstance(val, bool) != isinstance(self.values[0], bool):
-            raise ValueError(f"open.{key} = {val!r} must be one of {list(self.values)}")
-        return val
-
-    def text(self) -> str:
-        shown = ["true" if v is True else "false" if v is False else str(v) for v in self.values]
-        return " \\| ".join(shown + (["an action name"] if self.any_action else []))
+    if values == (True, False):
+        return Allowed(ParamSpec("", True, ""))
+    return Allowed(ParamSpec("", values[0], "", choices=values),
+                   (lambda n: n.actions) if any_action else None,
+                   " \\| ".join(values + (("an action name",) if any_action else ())))
 
 
-class ActionList:
+def ActionList() -> Allowed:  # noqa: N802
     """Distinct action names of the scenario (kept as a tuple)."""
-
-    def check(self, key: str, val, names: Names):
-        if not isinstance(val, (list, tuple)) or not all(isinstance(x, str) and x in names.actions for x in val) \
-                or len(set(val)) != len(val):
-            raise ValueError(f"open.{key} = {val!r} must be a list of distinct action names "
-                             f"({', '.join(sorted(names.actions))})")
-        return tuple(val)
-
-    def text(self) -> str:
-        return "distinct action names"
+    return Allowed(ParamSpec("", (), ""), lambda n: n.actions, "distinct action names")
 
 
 class DriveReadings:
