@@ -43,17 +43,24 @@ def repo_files() -> list[str]:
             if p.is_file() and not (set(p.relative_to(REPO).parts) & skip) and not p.name.startswith(".venv")]
 
 
+EXAMPLES = ("examples/homeo_rover",)  # packages of users' own robots: built beside the project, as a lab would
+
+
 def build_workspace(root: Path) -> Path:
-    """A colcon workspace at ``root`` with this repository cloned into ``src/``, built; its root."""
+    """A colcon workspace at ``root`` with this repository cloned into ``src/`` and the example world
+    packages beside it (a robot of one's own, docs/ARCHITECTURE.md "Adding a robot"), built; its root."""
     src = root / "src" / "homeo-robot"
     src.mkdir(parents=True)
     archive = root / "repo.tar"
+    files = repo_files()
     with tarfile.open(archive, "w") as tar:
-        for f in repo_files():
+        for f in files:
             tar.add(REPO / f, arcname=f)
     with tarfile.open(archive) as tar:
         tar.extractall(src)
     archive.unlink()
+    for example in EXAMPLES:
+        shutil.copytree(src / example, root / "src" / Path(example).name)
     r = subprocess.run([str(BIN / "colcon"), "build"], cwd=root, capture_output=True, text=True, timeout=600,
                        env=env_with_venv(os.environ))
     assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]

@@ -76,6 +76,24 @@ def test_ros2_launch_runs_the_graph_and_ends_with_exit_0_and_the_metrics(ws, env
     assert not _finished_cleanly(out) and out.count("process has finished cleanly") == 5, out[-3000:]
 
 
+def test_ros2_launch_runs_a_world_nobody_here_wrote_by_its_name(ws, env):
+    """The example package (examples/homeo_rover: a robot of one's own, built beside the project in the
+    workspace) through ``world.launch.py world:=rover``, its own parameter a launch argument; and the
+    arguments of every installed world listed, the Pepper's and the rover's among them."""
+    r = ros2cli.run(ws, f"ros2 launch {ros2cli.PACKAGE} world.launch.py --show-args", env)
+    assert r.returncode == 0 and "'speed'" in r.stdout and "'qi_url'" in r.stdout and "'world'" in r.stdout, r.stdout
+    r = ros2cli.run(ws, f"ros2 launch {ros2cli.PACKAGE} world.launch.py world:=rover iterations:=100 speed:=2.0",
+                    env, timeout=240)
+    out = r.stdout + r.stderr
+    assert r.returncode == 0 and "100 ticks, 0 missed" in out and "Traceback" not in out, out[-3000:]
+    assert not _finished_cleanly(out), out[-3000:]
+    for bad, why in (("speed:=0", "launch argument speed = 0.0 is outside"),  # the rover's declaration refuses it
+                     ("human:=person", "launch argument human is not one of world rover's")):  # another world's
+        r = ros2cli.run(ws, f"ros2 launch {ros2cli.PACKAGE} world.launch.py world:=rover {bad}", env, timeout=120)
+        out = r.stdout + r.stderr
+        assert r.returncode != 0 and why in out and "process started" not in out, out[-3000:]
+
+
 def test_ros2_run_starts_an_executable_and_a_bad_parameter_is_one_line(ws, env):
     r = ros2cli.run(ws, f"ros2 run {ros2cli.PACKAGE} homeo-sim run --iterations 200 --json --quiet", env)
     assert r.returncode == 0 and json.loads(r.stdout)["iterations"] == 200, r.stderr

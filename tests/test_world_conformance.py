@@ -9,7 +9,7 @@ import sys
 
 import pytest
 
-from homeo_decision.world_api import registered
+from homeo_decision.world_api import WorldConfigError, registered
 from homeo_decision.world_check import check_world
 from homeo_sim.world_backend import SimWorld
 
@@ -93,5 +93,15 @@ def test_the_command_exits_0_for_a_world_that_conforms_and_2_for_an_unknown_one(
     r = subprocess.run([sys.executable, "-m", "homeo_decision.world_check", "tiago"], capture_output=True, text=True)
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and "no world 'tiago'" in r.stderr, r.stderr
     r = subprocess.run([sys.executable, "-m", "homeo_decision.world_check", "sim", "--param", "human_timeout=-1"],
-                       capture_output=True, text=True, timeout=300)
-    assert r.returncode == 1 and "human_timeout = -1.0 is outside [0.01, 3600]" in r.stdout, r.stdout + r.stderr
+                       capture_output=True, text=True, timeout=300)  # a value its declaration refuses: usage
+    assert r.returncode == 2 and "human_timeout = -1.0 is outside [0.01, 3600]" in r.stderr, r.stdout + r.stderr
+
+
+def test_a_world_that_cannot_be_built_fails_once_not_in_every_check():
+    class NoConfig(SimWorld):
+        NAME = "no_config"
+
+        def __init__(self, sc, values):
+            raise WorldConfigError("config /nope.json: file not found")
+
+    assert check_world(NoConfig) == ["config /nope.json: file not found"]

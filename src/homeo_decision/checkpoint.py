@@ -23,7 +23,7 @@ import os
 from pathlib import Path
 
 from homeo_msgs_py.learning import LEARNING, SEED
-from homeo_msgs_py.params import number
+from homeo_msgs_py.params import checked
 
 from . import jsonfile, qtable_io
 from .objectq import ObjectQ
@@ -106,11 +106,8 @@ def check_codes(saved, ours: str, where: str) -> None:
 
 
 def check_int(v, what: str, lo: int = 0, hi: int = 2**62, kind: type = int):
-    """A checkpoint's number, checked by its declaration (``params.number``); CheckpointError (one line)."""
-    try:
-        return number(lo, hi, kind).check(v)
-    except ValueError as exc:
-        raise CheckpointError(f"{what} {exc}") from None
+    """A checkpoint's number, checked by its declaration (``params.checked``); CheckpointError (one line)."""
+    return checked(v, what, lo, hi, kind, CheckpointError)
 
 
 def check_world_position(pos, sc, voc, where: str, world_tick: int | None = None) -> dict:
@@ -187,28 +184,36 @@ def decision_learned(core) -> dict:
     return {"q": core.q.q, "rng": core.rng.state()}
 
 
-def restore_decision(core, ck: dict, where: str = "<memory>", params: bool = False) -> None:
-    """Put the checkpoint's table and random stream (and, with ``params``, its parameters) into
-    ``core``; everything is checked first, so a bad file leaves ``core`` as it was."""
-    q = ObjectQ(core.sc)
+def check_decision(sc, ck: dict, where: str = "<memory>", params: bool = False, seed: int = 0) -> tuple:
+    """The decision checkpoint's table, random stream and (with ``params``) parameters, each checked
+    against the scenario ``sc``: ``(ObjectQ, UniformStream, values or None)``; CheckpointError (one line)."""
+    q = ObjectQ(sc)
     try:
         qtable_io.from_dict(q, ck["state"], where)
     except qtable_io.QTableError as exc:
         raise CheckpointError(str(exc)) from None
-    rng = UniformStream(core.seed, "decision")
+    rng = UniformStream(seed, "decision")
     try:
         rng.set_state(ck.get("rng"))
     except ValueError as exc:
         raise CheckpointError(f"{where}: corrupt checkpoint (rng: {exc})") from None
+    if not params:
+        return q, rng, None
     p = ck["params"]
-    if params:
-        missing = [s.name for s in DECISION_PARAMS if s.name not in p]
-        if missing:
-            raise CheckpointError(f"{where}: corrupt checkpoint (params lack {', '.join(missing)})")
-        try:  # each as its declaration takes it; set_params then changes nothing before all are checked
-            values = {s.name: s.check(p[s.name]) for s in DECISION_PARAMS}
-        except ValueError as exc:
-            raise CheckpointError(f"{where}: corrupt checkpoint (params: {exc})") from None
+    missing = [s.name for s in DECISION_PARAMS if s.name not in p]
+    if missing:
+        raise CheckpointError(f"{where}: corrupt checkpoint (params lack {', '.join(missing)})")
+    try:  # each as its declaration takes it
+        return q, rng, {s.name: s.check(p[s.name]) for s in DECISION_PARAMS}
+    except ValueError as exc:
+        raise CheckpointError(f"{where}: corrupt checkpoint (params: {exc})") from None
+
+
+def restore_decision(core, ck: dict, where: str = "<memory>", params: bool = False) -> None:
+    """Put the checkpoint's table and random stream (and, with ``params``, its parameters) into
+    ``core``; everything is checked first, so a bad file leaves ``core`` as it was."""
+    q, rng, values = check_decision(core.sc, ck, where, params, core.seed)
+    if values is not None:  # set_params then changes nothing before all are checked
         core.set_params(**{s.name: values[s.name] for s in LEARNING})
         core.seed = values[SEED.name]
     core.q.q = q.q

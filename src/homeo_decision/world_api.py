@@ -125,7 +125,8 @@ class WorldBackend:
     last_failure: str | None = None  # "ACTION failed: why" when the last step's action was not performed
 
     def __init__(self, sc: Scenario, values: dict):
-        """``values``: every parameter of ``WORLD_PARAMS`` and ``PARAMS``, checked (``seed`` among them)."""
+        """``values``: every parameter of ``WORLD_PARAMS`` and ``PARAMS``, checked (``seed`` among them).
+        Raise ``WorldConfigError`` (one line) for what cannot start: the node exits 2 with it."""
         self.sc, self.values = sc, values
 
     # -- the lockstep: the node calls these on a worker thread when ``blocking`` ----------------------
@@ -137,9 +138,12 @@ class WorldBackend:
         return codec.observation_messages(self.sc, self.env.observe(), final)
 
     def step(self, action_fields: dict | None) -> dict:
-        """Perform the tick's action (None: none came); the ``homeo/outcome`` fields."""
+        """Perform the tick's action (None: none came); the ``homeo/outcome`` fields. An ``Outcome``'s
+        ``failure`` (why the action asked was not performed) becomes ``last_failure``."""
         name = action_fields.get("action") if action_fields is not None else None
-        return codec.outcome_fields(self.sc, self.env.step(self.sc.action_index(name) if name is not None else None))
+        out = self.env.step(self.sc.action_index(name) if name is not None else None)
+        self.last_failure = f"{name} failed: {out.failure}" if out.failure and name is not None else None
+        return codec.outcome_fields(self.sc, out)
 
     def step_failed(self, action_fields: dict | None, reason: str) -> dict:
         """The outcome fields when ``step`` raised (``FAILS_STEPS``); else this raises again."""
@@ -219,7 +223,9 @@ class WorldBackend:
         return None, {}
 
     def set_state(self, rng, state: dict, tick: int) -> None:
-        """Go on from ``state()`` at ``tick``; ValueError (one line) for anything else, changing nothing."""
+        """Go on from ``state()`` at ``tick``; ValueError (one line) for anything else, changing nothing. A
+        state that holds the world holds the tick it was taken at (a world counts its own steps), and one
+        of another tick than ``tick`` is refused."""
         if state:
             raise ValueError("this world keeps no state")
 

@@ -8,7 +8,8 @@ stand-in its ``test_double`` gives. A robot's own package imports it in its test
     assert check_world("tiago", qi_url="tcp://127.0.0.1:9559") == []   # each failure is one line
 
     python -m homeo_decision.world_check NAME [--param K=V ...] [--scenario FILE]
-    # exit 0 when the world conforms; 1 with each failure in one line; 2 for a usage mistake
+    # exit 0 when the world conforms; 1 with each failure in one line; 2 for a usage mistake (an unknown
+    # world, a parameter it does not have or a value its declaration refuses)
 """
 
 from __future__ import annotations
@@ -52,8 +53,12 @@ def check_world(world, scenario=None, **params) -> list[str]:
     failures = _declaration(cls, world)
     try:
         values = _values(cls, params)
-    except (ValueError, Failure) as exc:
-        return failures + [str(exc)]
+        cls.check(sc, values)
+        with _Worlds(cls, sc, values) as ws:  # a world that cannot be built with these values: said once
+            ws.make(0)
+    except Exception as exc:  # noqa: BLE001 - a parameter refused, a WorldConfigError, whatever the world raises
+        return failures + [f"{type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}"
+                           if not isinstance(exc, ValueError) else str(exc)]
     for check in (_contract, _seeding, _state, _link):
         try:
             check(cls, sc, values)
@@ -94,7 +99,7 @@ def _values(cls, params: dict) -> dict:
     values.update(intention_learns=True, world=cls.NAME)
     for k, v in params.items():
         if k not in specs:
-            raise Failure(f"no parameter {k!r}; the world's: {', '.join(s.name for s in cls.PARAMS) or 'none'}")
+            raise ValueError(f"no parameter {k!r}; the world's: {', '.join(s.name for s in cls.PARAMS) or 'none'}")
         values[k] = specs[k].parse(v) if isinstance(v, str) and specs[k].kind is not str else specs[k].check(v)
     return values
 
@@ -298,8 +303,9 @@ def main(argv=None) -> int:
         ap.add_argument("--scenario", metavar="FILE", type=user_path, help="scenario JSON (default: the thesis's)")
         a = ap.parse_args(argv)
         try:
-            world_class(a.world)
-        except WorldConfigError as exc:
+            cls = world_class(a.world)
+            _values(cls, dict(a.param))
+        except (WorldConfigError, ValueError) as exc:
             raise UserError(str(exc)) from None
         failures = check_world(a.world, a.scenario, **dict(a.param))
         print("\n".join(f"{a.world}: {f}" for f in failures) or f"{a.world}: conforms")

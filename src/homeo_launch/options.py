@@ -128,13 +128,12 @@ def check_resume(d: str, sc, bayes: bool) -> None:
     """Every checkpoint a resumed run needs is there and loads into this scenario (one-line errors
     here, not in the nodes)."""
     from homeo_decision import checkpoint
-    from homeo_decision.agent import DecisionCore
 
     if not os.path.isdir(d):
         raise UserError(f"--resume {d}: no such directory")
     try:
-        ck = checkpoint.load(checkpoint.path_for(d, "homeo_decision"), "homeo_decision")
-        checkpoint.restore_decision(DecisionCore(sc, 0), ck, str(checkpoint.path_for(d, "homeo_decision")))
+        p = checkpoint.path_for(d, "homeo_decision")
+        checkpoint.check_decision(sc, checkpoint.load(p, "homeo_decision"), str(p))
         if bayes:
             from homeo_intention.checkpoint import restore_intention
             from homeo_intention.model import IntentionModel

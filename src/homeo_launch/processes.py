@@ -109,16 +109,10 @@ class Graph:
 
     def rss_mb(self) -> float:
         """Resident memory of all node processes, in MiB (from /proc)."""
-        total = 0
+        from homeo_record.procfs import rss_mb
+
         nodes = {s.name for s in self.specs if s.argv is None}
-        for p in (p for n, p in self.procs.items() if n in nodes):
-            try:
-                for line in Path(f"/proc/{p.pid}/status").read_text().splitlines():
-                    if line.startswith("VmRSS:"):
-                        total += int(line.split()[1])
-            except (OSError, ValueError):
-                pass
-        return total / 1024.0
+        return sum(rss_mb(p.pid) or 0.0 for n, p in self.procs.items() if n in nodes)
 
     def stop(self) -> dict[str, int | None]:
         """SIGINT every node, then SIGTERM / SIGKILL the ones that linger; returns exit codes."""

@@ -64,7 +64,7 @@ class LaunchArgError(ValueError):
 
 def world_args(world: str | None) -> dict:
     """The launch arguments of ``world``'s own parameters and launch options (every installed world's for
-    None): name -> (its worlds, the declaration)."""
+    None): name -> [(world, its doc of it)], each world's own (two worlds may share a name)."""
     out: dict = {}
     for name in ([world] if world else sorted(registered())):
         try:
@@ -72,7 +72,7 @@ def world_args(world: str | None) -> dict:
         except ValueError:
             continue  # a world that does not load: world:= says so when it is chosen
         for s in (*cls.PARAMS, *cls.LAUNCH):
-            out.setdefault(s.name, ([], s))[0].append(name)
+            out.setdefault(s.name, []).append((name, f"{s.doc} (default {s.default!r})"))
     return out
 
 
@@ -82,7 +82,7 @@ def launch_description(world: str | None = None):
     from launch.actions import DeclareLaunchArgument, OpaqueFunction
 
     args = list(COMMON) + ([] if world else [("world", "sim", f"the world: {', '.join(sorted(registered()))}")])
-    args += [(n, "", f"({', '.join(ws)}) {s.doc}") for n, (ws, s) in world_args(world).items()]
+    args += [(n, "", "; ".join(f"({w}) {doc}" for w, doc in docs)) for n, docs in world_args(world).items()]
     return LaunchDescription([DeclareLaunchArgument(n, default_value=d, description=t) for n, d, t in args]
                              + [OpaqueFunction(function=_graph, kwargs={"world": world, "names": [a[0] for a in args]})])
 

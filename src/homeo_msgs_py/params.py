@@ -46,7 +46,7 @@ class ParamSpec:
     def check(self, value):
         """``value`` as this parameter's type, or ValueError with a one-line reason (an int is
         taken for a float; nothing else is converted)."""
-        t = self.kind
+        t, given = self.kind, value
         if t is float and type(value) is int:
             value = float(value)
         if t is tuple and isinstance(value, list):
@@ -58,8 +58,8 @@ class ParamSpec:
             if t is float and not math.isfinite(value):
                 raise ValueError(f"{who}must be a finite number, not {value!r}")
             if (self.lo is not None and value < self.lo) or (self.hi is not None and value > self.hi):
-                raise ValueError(f"{who}= {value!r} is outside {self.range_text()}" if who else
-                                 f"{value!r} is outside {self.range_text()}")
+                raise ValueError(f"{who}= {given!r} is outside {self.range_text()}" if who else
+                                 f"{given!r} is outside {self.range_text()}")
         if self.choices and value not in self.choices:
             raise ValueError(f"{who}must be one of {', '.join(self.choices)}, not {_shown(value)}")
         return value
@@ -122,6 +122,16 @@ def arg_type(spec: ParamSpec):
 def number(lo: float | None, hi: float | None = None, kind: type = int) -> ParamSpec:
     """A nameless number in [lo, hi] (a command-line count, a checkpoint's field): ``.check`` or ``arg_type``."""
     return ParamSpec("", kind(lo if lo is not None else 0), "", lo, hi)
+
+
+def checked(v, what: str, lo: float | None = None, hi: float | None = None, kind: type = float,
+            error: type[Exception] = ValueError):
+    """``v`` as a number of ``kind`` in [lo, hi], checked by its declaration (``number``); else ``error``: one
+    line that names ``what`` (a file's field, a checkpoint's)."""
+    try:
+        return ParamSpec(what, kind(lo if lo is not None else 0), "", lo, hi).check(v)
+    except ValueError as exc:
+        raise error(str(exc)) from None
 
 
 def add_flag(parser, spec: ParamSpec, default=None, help_extra: str = "") -> None:

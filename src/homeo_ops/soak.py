@@ -34,19 +34,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from homeo_record.procfs import stat_fields
+from homeo_record.procfs import rss_mb, stat_fields
 
 SAMPLES = 40  # memory samples over a run
-
-
-def rss_mb(pid: int | str = "self") -> float | None:
-    try:
-        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1]) / 1024.0
-    except (OSError, ValueError):
-        pass
-    return None
 
 
 def cpu_s(pid: int | str = "self") -> float | None:

@@ -23,7 +23,7 @@ from pathlib import Path
 
 from homeo_decision.scenario import NONE_INTENTION, Scenario
 from homeo_decision.world_api import WorldConfigError
-from homeo_msgs_py.params import ParamSpec
+from homeo_msgs_py.params import ParamSpec, checked
 
 from .human import SimHuman
 from .world_backend import SimWorld
@@ -67,8 +67,7 @@ def check_day(raw, sc: Scenario, where: str = "<memory>") -> dict:
         if not isinstance(m, dict) or set(m) - {"ticks", "wish", "present"}:
             raise DayScriptError(f"{ctx} must be an object of ticks, wish and present")
         ticks, wish, present = m.get("ticks"), m.get("wish", NONE_INTENTION), m.get("present", True)
-        if type(ticks) is not int or not 1 <= ticks <= MAX_TICKS:
-            raise DayScriptError(f"{ctx}: ticks must be an integer in 1..{MAX_TICKS}")
+        checked(ticks, f"{ctx}: ticks", 1, MAX_TICKS, int, DayScriptError)
         if not isinstance(wish, str) or wish not in names:
             raise DayScriptError(f"{ctx}: wish {str(wish)[:40]!r} is not one of {', '.join(names)}")
         if type(present) is not bool:

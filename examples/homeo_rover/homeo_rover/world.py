@@ -11,6 +11,7 @@ objects' ``on_leave`` and the ``ongoing`` effects. Nothing is random: one config
 import json
 import math
 from importlib import resources
+from pathlib import Path
 
 from homeo_decision.codec import body_vector
 from homeo_decision.environment import Outcome
@@ -21,11 +22,12 @@ from homeo_msgs_py.params import ParamSpec
 def load_config(sc, path):
     """``rover.json`` (or the file at ``path``), checked against the scenario: WorldConfigError, one line."""
     try:
-        cfg = json.loads(open(path).read() if path else resources.files(__package__).joinpath("rover.json").read_text())
+        cfg = json.loads(Path(path).read_text() if path else resources.files(__package__).joinpath("rover.json").read_text())
         places, user = cfg["places"], cfg["user"]
         wrong = [p["location"] for p in places.values() if p["location"] not in sc.locations]
         wrong += sorted(set(sc.locations) - {p["location"] for p in places.values()})  # every location reachable
-        wrong += [b["drive"] for b in cfg["body"].values() if b["drive"] not in sc.drive_names]
+        body = {d.name for d in sc.drives if d.source == "body"}  # the drives a world reads (the others: the robot's own)
+        wrong += [b["drive"] for b in cfg["body"].values() if b["drive"] not in body]
         wrong += [a for a in cfg["devices"] if a not in sc.action_names]
         wrong += [i for i, ticks in user["routine"] if i not in sc.intention_names or ticks < 1]
         wrong += [i for i in cfg["cues"]["hears"] if i not in sc.intention_names]
@@ -67,13 +69,13 @@ class Rover:
     def location(self):
         return self.cfg["places"][self.place()]["location"]
 
+    def relation(self):  # the person stays at their place
+        return "near" if self.place() == self.cfg["user"]["place"] else "far"
+
     def view(self, intention="none"):  # every variable of the world as the scenario names it
         v = {"robot.location": self.location(), "human.relation": self.relation(), "intention": intention}
         v.update({f"{o}.{k}": val for o, vs in self.objects.items() for k, val in vs.items()})
         return self.sc.view(self.sc.encode(v))
-
-    def relation(self):
-        return "near" if self.place() == self.cfg["user"]["place"] else "far"
 
     def wish(self):
         """The person's wish this tick: the routine's when it is reasonable now, else none."""
@@ -117,7 +119,8 @@ class Rover:
                         if var == "robot.location":
                             self.drive_to(self.at[value])
                         else:
-                            self.objects[var.split(".")[0]][var.split(".", 1)[1]] = value
+                            obj, key = var.split(".", 1)
+                            self.objects[obj][key] = value
                     self.change(effect.get("drives", {}))
                 if spec.name in self.cfg["devices"]:
                     self.sent.append(dict(self.cfg["devices"][spec.name], action=spec.name, tick=self.tick))
@@ -155,16 +158,16 @@ class RoverWorld(WorldBackend):
     def check(cls, sc, values):
         load_config(sc, values.get("config") or "")
 
-    def set_param(self, name, value):
-        self.env.speed = value if name == "speed" else self.env.speed
-        return None
+    def set_param(self, name, value):  # checked by its ParamSpec already; config never gets here (fixed)
+        if name == "speed":
+            self.env.speed = value  # the next metres driven
 
     def devices(self):
         sent, self.env.sent = self.env.sent, []
         return sent
 
     def status(self, done):
-        return {"metrics": dict(self.env.count)}
+        return {"metrics": {k: round(v, 3) for k, v in self.env.count.items()}}
 
     @classmethod
     def result(cls, sc, status, setting):
@@ -172,8 +175,8 @@ class RoverWorld(WorldBackend):
 
     @classmethod
     def result_text(cls, sc, result, setting):
-        return (super().result_text(sc, result, setting) + "\nrover: praised {praised}, scolded {scolded}, "
-                "drove {metres:.1f} m".format(**dict({"praised": 0, "scolded": 0, "metres": 0.0}, **result)))
+        mine = "\nrover: praised {praised}, scolded {scolded}, drove {metres:.1f} m"
+        return super().result_text(sc, result, setting) + mine.format(**{"praised": 0, "scolded": 0, "metres": 0, **result})
 
     def state(self):
         return None, json.loads(json.dumps({k: getattr(self.env, k) for k in Rover.STATE}))

@@ -2,6 +2,7 @@
 
 import json
 from importlib import resources
+from pathlib import Path
 
 import pytest
 from homeo_decision.scenario import load_scenario
@@ -23,6 +24,11 @@ def test_a_slow_rover_with_a_config_of_its_own_keeps_it_too(tmp_path):
     assert check_world("rover", speed=1.5, config=str(tmp_path / "mine.json")) == []
 
 
+def test_the_same_rover_keeps_it_in_another_scenario_with_another_config():
+    garden = Path(__file__).resolve().parent.parent / "garden.json"
+    assert check_world("rover", scenario=load_scenario("garden"), config=str(garden)) == []
+
+
 def test_a_config_that_is_not_the_scenarios_is_refused_in_one_line(tmp_path):
     bad = dict(SHIPPED, devices={"Fly": {"device": "rotor", "command": "spin"}})
     (tmp_path / "bad.json").write_text(json.dumps(bad))
@@ -30,19 +36,19 @@ def test_a_config_that_is_not_the_scenarios_is_refused_in_one_line(tmp_path):
         RoverWorld.check(load_scenario(), {"config": str(tmp_path / "bad.json")})
 
 
-@pytest.mark.parametrize("speed, ticks", [(6.0, 1), (4.0, 2), (1.0, 6)])
-def test_driving_to_the_person_takes_the_ticks_its_speed_gives(speed, ticks):
+@pytest.mark.parametrize("speed, xs", [(6.0, [0.0]), (4.0, [2.0, 0.0]), (2.5, [3.5, 1.0, 0.0])])
+def test_the_rover_drives_speed_metres_a_tick_and_is_at_the_nearest_place(speed, xs):
     sc = load_scenario()
     world = RoverWorld(sc, {"seed": 0, "config": "", "speed": speed})
-    rover, places = world.env, SHIPPED["places"]
-    goal = SHIPPED["user"]["place"]
+    rover, places, goal = world.env, SHIPPED["places"], SHIPPED["user"]["place"]
     go = next(i for i, a in enumerate(sc.actions)  # the scenario's action that moves the robot there
               if any(e.get("set", {}).get("robot.location") == places[goal]["location"] for e in a.effects))
-    assert abs(places[goal]["x"] - places[SHIPPED["start"]]["x"]) == 6.0
-    for tick in range(ticks):
-        assert rover.relation() == "far"
-        assert rover.step(go).action == go
-    assert rover.place == goal and rover.relation() == "near"
+    assert (places[SHIPPED["start"]]["x"], places[goal]["x"]) == (6.0, 0.0)
+    assert rover.relation() == "far"
+    for x in xs:
+        assert rover.step(go).action == go and rover.x == x
+        assert rover.place() == min(places, key=lambda p: abs(places[p]["x"] - x))
+    assert rover.place() == goal and rover.relation() == "near"
     assert world.devices() == [] and rover.count["metres"] == 6.0
 
 

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from homeo_msgs_py.learning import DOD, LEARNING, check_learning
+from homeo_msgs_py.params import checked
 
 from ..numeric import left_sum
 from .compile import _compile
@@ -181,8 +182,7 @@ def _scenario_from_dict(raw: Any, source: str, overrides: Mapping[str, Any] | No
         for m, v in eff.items():
             if m not in motiv:
                 raise ScenarioError(f"{where}: {ctx} affects unknown motivation {m!r}; known: {motiv}")
-            if not isinstance(v, (int, float)) or isinstance(v, bool):
-                raise ScenarioError(f"{where}: {ctx}.effects.{m} must be a number")
+            checked(v, f"{where}: {ctx}.effects.{m}", error=ScenarioError)
         stimuli.append({"name": st.get("name", f"stimulus{i}"), "when": st["when"], "effects": dict(eff)})
 
     actions = []
@@ -288,8 +288,7 @@ def _check_drives(changes: Mapping, dnames: list, ctx: str, where: str) -> None:
     for dn, dv in changes.items():
         if dn not in dnames:
             raise ScenarioError(f"{where}: {ctx} changes unknown drive {dn!r}")
-        if not isinstance(dv, (int, float)) or isinstance(dv, bool):
-            raise ScenarioError(f"{where}: {ctx}.drives.{dn} must be a number")
+        checked(dv, f"{where}: {ctx}.drives.{dn}", error=ScenarioError)
 
 
 def _unique(names: Sequence, what: str, where: str) -> None:
@@ -323,8 +322,7 @@ def _parse_observations(obs: Any, intention_names: list, where: str) -> Observat
         for sym, p in spec.items():
             if sym not in symbols:
                 raise ScenarioError(f"{dctx}: unknown symbol {sym!r}; known: {', '.join(symbols)}")
-            if not isinstance(p, (int, float)) or isinstance(p, bool) or not 0.0 <= p <= 1.0:
-                raise ScenarioError(f"{dctx}.{sym} = {p!r} must be a probability in [0, 1]")
+            checked(p, f"{dctx}.{sym}: a probability", 0.0, 1.0, error=ScenarioError)
         total = left_sum(float(v) for v in spec.values())
         rest = [s for s in symbols if s not in spec]
         if total > 1.0 + 1e-9:

@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, fields
 from typing import Any, Callable, Mapping, Sequence
 
-from homeo_msgs_py.params import ParamSpec, number
+from homeo_msgs_py.params import ParamSpec, checked, number
 
 from .model import HUMAN_VARS, NO_MOTIVATION, ScenarioError
 
@@ -219,8 +219,7 @@ def _initial_state(block: Mapping, names: Names, locations: Sequence, base_vars:
     for dn, v in init.items():
         if dn not in names.drives:
             raise ScenarioError(f"{where}: open.initial_drives has unknown drive {dn!r}")
-        if not isinstance(v, (int, float)) or isinstance(v, bool) or not 0 <= v <= 100:
-            raise ScenarioError(f"{where}: open.initial_drives.{dn} = {v!r} must be in [0, 100]")
+        checked(v, f"{where}: open.initial_drives.{dn}", 0, 100, error=ScenarioError)
     loc = block.get("initial_location", locations[0])
     if not isinstance(loc, str) or loc not in locations:
         raise ScenarioError(f"{where}: open.initial_location {loc!r} is not a location")

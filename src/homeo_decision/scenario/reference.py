@@ -32,6 +32,7 @@ from __future__ import annotations
 from typing import Any, Sequence
 
 from homeo_msgs_py.learning import DOD, XI
+from homeo_msgs_py.params import checked
 
 from .model import ReferenceSpec, ScenarioError
 
@@ -42,10 +43,6 @@ SWEEP_NAMES = (XI_SWEEP, DOD_SWEEP, PSEUDO_SWEEP)
 STATEMENT_TEXTS = (XI_SWEEP, PSEUDO_SWEEP, DOD_SWEEP)
 STATEMENT_NUMBERS = ("rsr_at_xi0_below", "hsr_at_dod0", "rsr_below_half_from_dod", "best_dod")
 STATEMENT_DRIVES = ("pseudo_unaffected_drive",)
-
-
-def _number(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
 def parse_reference(block: Any, drive_names: Sequence[str], where: str) -> ReferenceSpec:
@@ -59,8 +56,8 @@ def parse_reference(block: Any, drive_names: Sequence[str], where: str) -> Refer
     if not isinstance(metrics, dict) or set(metrics) - {"HSR", "RSR", "CDA", "CEDA"}:
         raise ScenarioError(f"{ctx}.metrics must be an object with (some of) HSR, RSR, CDA, CEDA")
     for k in ("HSR", "RSR"):
-        if k in metrics and (not _number(metrics[k]) or not 0 <= metrics[k] <= 1):
-            raise ScenarioError(f"{ctx}.metrics.{k} = {metrics[k]!r} must be a rate in [0, 1]")
+        if k in metrics:
+            checked(metrics[k], f"{ctx}.metrics.{k}: a rate", 0, 1, error=ScenarioError)
     for k in ("CDA", "CEDA"):
         per = metrics.get(k, {})
         if not isinstance(per, dict):
@@ -68,8 +65,7 @@ def parse_reference(block: Any, drive_names: Sequence[str], where: str) -> Refer
         for dn, v in per.items():
             if dn != "all" and dn not in drive_names:
                 raise ScenarioError(f"{ctx}.metrics.{k}: unknown drive {dn!r}; known: {', '.join(drive_names)}, all")
-            if not _number(v) or not 0 <= v <= 100:
-                raise ScenarioError(f"{ctx}.metrics.{k}.{dn} = {v!r} must be a number in [0, 100]")
+            checked(v, f"{ctx}.metrics.{k}.{dn}", 0, 100, error=ScenarioError)
     statements = block.get("statements")
     if statements is not None:
         known = set(STATEMENT_TEXTS + STATEMENT_NUMBERS + STATEMENT_DRIVES)
@@ -79,8 +75,7 @@ def parse_reference(block: Any, drive_names: Sequence[str], where: str) -> Refer
             if not isinstance(statements[k], list) or not all(isinstance(s, str) for s in statements[k]):
                 raise ScenarioError(f"{ctx}.statements.{k} must be a list of texts")
         for k in STATEMENT_NUMBERS:
-            if not _number(statements[k]) or not 0 <= statements[k] <= 1:
-                raise ScenarioError(f"{ctx}.statements.{k} = {statements[k]!r} must be a number in [0, 1]")
+            checked(statements[k], f"{ctx}.statements.{k}", 0, 1, error=ScenarioError)
         for k in STATEMENT_DRIVES:
             if statements[k] not in drive_names:
                 raise ScenarioError(f"{ctx}.statements.{k}: unknown drive {statements[k]!r}; known: {', '.join(drive_names)}")
@@ -152,9 +147,9 @@ def _criterion(c: Any, drive_names: Sequence[str], ctx: str) -> dict:
     if "sweep" in c and c["sweep"] not in _SWEEPS:
         raise ScenarioError(f"{ctx}.sweep = {c['sweep']!r} must be one of {list(_SWEEPS)}")
     for k in ("value", "tol", "level", "lo", "hi"):
-        if k in c and not _number(c[k]):
-            raise ScenarioError(f"{ctx}.{k} = {c[k]!r} must be a number")
-    if "points" in c and (not isinstance(c["points"], list) or len(c["points"]) != 3 or not all(map(_number, c["points"]))):
+        if k in c:
+            checked(c[k], f"{ctx}.{k}", error=ScenarioError)
+    if "points" in c and (not isinstance(c["points"], list) or len(c["points"]) != 3 or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in c["points"])):
         raise ScenarioError(f"{ctx}.points must be three numbers [low, middle, high]")
     for k in ("metrics", "product"):
         if k in c and (not isinstance(c[k], list) or not c[k]):

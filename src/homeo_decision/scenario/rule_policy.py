@@ -21,13 +21,11 @@ from __future__ import annotations
 
 from typing import Any, Callable, Mapping, Sequence
 
+from homeo_msgs_py.params import checked
+
 from .model import DriveSpec, RuleCandidate, RuleSpec, ScenarioError
 
 RULE_KEYS = {"name", "drive", "at", "keep_while", "when", "serve", "actions", "description"}
-
-
-def _number(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
 def parse_rule_policy(block: Any, drives: Sequence[DriveSpec], action_ids: Mapping[str, int],
@@ -58,14 +56,12 @@ def parse_rule_policy(block: Any, drives: Sequence[DriveSpec], action_ids: Mappi
                 raise ScenarioError(f"{where}: {rctx}: unknown drive {r['drive']!r}; known: {', '.join(dnames)}")
             drive = dnames.index(r["drive"])
             at = r.get("at", drives[drive].threshold)  # default: where the drive's motivation activates (Eq 3.2)
-            if not _number(at) or not 0 <= at <= 100:
-                raise ScenarioError(f"{where}: {rctx}.at = {at!r} must be a number in [0, 100]")
+            checked(at, f"{where}: {rctx}.at", 0, 100, error=ScenarioError)
             if "keep_while" in r:
                 kw = r["keep_while"]
                 if not isinstance(kw, dict) or set(kw) - {"when", "above"} or "above" not in kw:
                     raise ScenarioError(f"{where}: {rctx}.keep_while must be an object with 'above' and an optional 'when'")
-                if not _number(kw["above"]) or not 0 <= kw["above"] <= 100:
-                    raise ScenarioError(f"{where}: {rctx}.keep_while.above = {kw['above']!r} must be a number in [0, 100]")
+                checked(kw["above"], f"{where}: {rctx}.keep_while.above", 0, 100, error=ScenarioError)
                 keep_when = dict(kw.get("when", {}))
                 check_cond(keep_when, f"{rctx}.keep_while.when")
                 keep_above = float(kw["above"])
