@@ -27,7 +27,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
-from homeo_launch.soak import format_fresh, side_by_side  # noqa: E402
+from homeo_ops.soak import format_fresh, side_by_side  # noqa: E402
 
 
 def drift(g: dict, segments: int) -> dict:

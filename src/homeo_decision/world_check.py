@@ -17,6 +17,7 @@ from __future__ import annotations
 import copy
 import json
 import time
+from contextlib import ExitStack
 
 from homeo_msgs_py.graph import INTENTION_MODES, NODES, WORLD
 from homeo_msgs_py.learning import LEARNING
@@ -104,40 +105,24 @@ def _values(cls, params: dict) -> dict:
     return values
 
 
-class _Worlds:
+class _Worlds(ExitStack):
     """Worlds built as the node builds them, each on a test double of its own (a stand-in robot per world:
-    two worlds with one seed meet the same outside world); all closed at the end."""
+    two worlds with one seed meet the same outside world); all closed, and their doubles, at the end."""
 
     def __init__(self, cls, sc, values):
+        super().__init__()
         self.cls, self.sc, self.values = cls, sc, values
-        self.made: list = []  # (world, its double's context)
-        self.drop = {}
-
-    def __enter__(self):
-        return self
 
     def make(self, seed: int) -> WorldBackend:
-        double = self.cls.test_double(self.sc, dict(self.values, seed=seed))
-        values, drop = double.__enter__()
-        try:
-            w = self.cls(self.sc, values)
-        except BaseException:
-            double.__exit__(None, None, None)
-            raise
-        self.made.append((w, double))
-        self.drop[id(w)] = drop
+        values, drop = self.enter_context(self.cls.test_double(self.sc, dict(self.values, seed=seed)))
+        w = self.cls(self.sc, values)
+        self.callback(w.close)
+        w.checker_drop = drop
         end = time.monotonic() + READY_S
         while w.ready() and time.monotonic() < end:
             time.sleep(0.05)
         _expect(not w.ready(), f"not ready within {READY_S:g} s: {'; '.join(w.ready())}")
         return w
-
-    def __exit__(self, *exc):
-        for w, double in reversed(self.made):
-            try:
-                w.close()
-            finally:
-                double.__exit__(None, None, None)
 
 
 def _message(schema: str, fields, voc, tick: int) -> dict:
@@ -268,11 +253,10 @@ def _link(cls, sc, values) -> None:
         return
     with _Worlds(cls, sc, values) as ws:
         w = ws.make(1)
-        drop = ws.drop[id(w)]
-        _expect(drop is not None, "DROPS_LINK, but test_double gives no way to drop the link")
+        _expect(w.checker_drop is not None, "DROPS_LINK, but test_double gives no way to drop the link")
         w.start()
         _run(w, sc, 1)
-        drop(3.0)
+        w.checker_drop(3.0)
         end, failed = time.monotonic() + 10.0, False
         while time.monotonic() < end and not failed:
             try:

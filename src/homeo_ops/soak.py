@@ -105,7 +105,7 @@ class Reference:
     def __init__(self):
         import subprocess
 
-        self.proc = subprocess.Popen([sys.executable, "-c", "from homeo_launch.soak import reference_loop; "
+        self.proc = subprocess.Popen([sys.executable, "-c", "from homeo_ops.soak import reference_loop; "
                                       "reference_loop()"], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
                                      env=dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p)))
         self.samples: list[tuple[int, int, float]] = []
