@@ -36,7 +36,7 @@ test: setup ros2-tools profile-setup calibrate-setup
 # colcon workspace): what .ci/run runs on the second Python
 CORE_TESTS = tests/test_golden.py tests/test_graph_stages.py tests/test_determinism.py tests/test_scenario.py \
              tests/test_objectq.py tests/test_reward.py tests/test_motivation.py tests/test_world_conformance.py \
-             tests/test_ros2_workspace.py
+             tests/test_ros2_workspace.py tests/test_example_world.py
 test-core: setup ros2-tools
 	$(BIN)/python -m pytest -q -n $(WORKERS) $(CORE_TESTS)
 

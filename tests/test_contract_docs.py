@@ -30,3 +30,11 @@ def test_architecture_md_has_the_generated_parameter_tables():
     text = (DOCS / "ARCHITECTURE.md").read_text()
     assert table() in text, "regenerate: python -m homeo_msgs_py.learning"
     assert tables() in text, "regenerate: python -m homeo_decision.world_api"
+
+
+def test_graph_md_has_the_graph_description():
+    """Who sends what to whom, and what rides in what (issue 29: the outcome of k-1 in the world and
+    observation of k), as the one description says it."""
+    from homeo_msgs_py.graph import describe
+
+    assert describe() in (DOCS / "GRAPH.md").read_text(), "regenerate: python -m homeo_msgs_py.graph"

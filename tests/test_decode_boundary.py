@@ -82,8 +82,7 @@ def world(thesis):
     handlers = {
         ("homeo_world", "action"): driver.on_action,
         ("homeo_intention", "observation"): on_observation,
-        ("homeo_intention", "outcome"): lambda m: intention.stage.put("outcome", m),
-        **{("homeo_drives", k): (lambda m, k=k: drives.stage.put(k, m)) for k in ("world", "intention", "outcome")},
+        **{("homeo_drives", k): (lambda m, k=k: drives.stage.put(k, m)) for k in ("world", "intention")},
         ("homeo_decision", "drives"): lambda m: decision.stage.put("drives", m),
     }
     # every input of every node of the graph has its handler here

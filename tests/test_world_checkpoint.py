@@ -86,9 +86,9 @@ def test_a_world_restored_from_its_checkpoint_goes_on_exactly_as_one_that_never_
     assert pos["tick"] == at and drv2.iterations == n
     host2.go_on(pos["run"], pos["tick"], pos, 0)
     _drive(drv2, robot, sent)
-    # from the re-sent outcome of tick at-1 on, every message is the uninterrupted run's
+    # from the observation of tick at on (it carries the outcome of at-1), every message is the uninterrupted run's
     first = ref_sent.index(sent[0])
-    assert sent[0][:2] == ("outcome", at - 1) and sent == ref_sent[first:]
+    assert sent[0][:2] == ("observation", at) and sent == ref_sent[first:]
     assert side2.status(True)["metrics"] == ref_metrics
     assert side2.rec.state() == side.rec.state() and side2.env.state() == side.env.state()
 

@@ -1,11 +1,11 @@
 """``homeo_drives`` node: the robot's perception part (``homeo_decision.robot.Perception``).
 
 Publishes  homeo/drives (state), /diagnostics
-Subscribes homeo/world (state), homeo/intention (state), homeo/outcome (event)
+Subscribes homeo/world (state, carrying the outcome of the tick before), homeo/intention (state)
 Parameters scenario, overrides, and the checkpoint parameters of ``durable`` (read-only)
 
-Tick k joins the world and the recognised intention of tick k with the outcome of tick k-1
-(``homeo_msgs_py.graph``): the effects of k-1, the body of k, Eq 3.2-3.3 for the perceived world.
+Tick k joins the world of tick k (which carries the outcome of tick k-1: ``homeo_msgs_py.graph``) and the
+recognised intention of tick k: the effects of k-1, the body of k, Eq 3.2-3.3 for the perceived world.
 
 The node carries the internal drives from tick to tick: no latched topic holds them once the node
 is gone (its own latched drives die with it), so it checkpoints them every tick in two slots of one

@@ -13,7 +13,7 @@ from .scenario import Scenario
 
 
 class PerceptionHost:
-    """``homeo_drives``: world(k) + intention(k) + outcome(k-1) -> drives(k)."""
+    """``homeo_drives``: world(k) (carrying the outcome of k-1) + intention(k) -> drives(k)."""
 
     def __init__(self, sc: Scenario):
         self.sc = sc
@@ -22,7 +22,7 @@ class PerceptionHost:
 
     def _tick(self, k: int, inputs: dict) -> dict:
         sc, world = self.sc, inputs["world"]
-        out = codec.outcome_from_fields(sc, inputs["outcome"]) if "outcome" in inputs else None
+        out = codec.outcome_from_fields(sc, world["outcome"]) if "outcome" in world else None  # of tick k-1
         obs = codec.observation_from_fields(sc, world, None)  # raises ScenarioError for a world it cannot encode
         perceived = self.perception.tick(obs.code, sc.intention_names.index(inputs["intention"]["intention"]),
                                          obs.body, out)

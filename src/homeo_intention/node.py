@@ -1,17 +1,17 @@
 """``homeo_intention`` node: the robot's recognition part (``homeo_intention.recognition``).
 
 Publishes  homeo/intention (state: the recognised intention and its posterior, Eq 2.10), /diagnostics
-Subscribes homeo/observation (event: gesture, movement, keyword; and the true intention, which
-           only the oracle reads), and in bayes mode homeo/outcome (event: a proposal or
-           clarification reveals the intention, and the network learns by EM)
+Subscribes homeo/observation (event: gesture, movement, keyword; the true intention, which only the
+           oracle reads; and the outcome of the tick before, whose proposal or clarification reveals
+           the intention: in bayes mode the network learns from it by EM)
 Services   ~/save_model, ~/load_model (std_srvs/Trigger: the file in model_path; bayes mode)
 Parameters mode ('bayes': the Bayesian network of Section 2.3; 'oracle': the thesis's simulation,
            intention observed directly), model_path, load_on_start, scenario, overrides (read-only),
            and the checkpoint parameters of ``homeo_decision.durable`` (bayes mode: the model and
            the ticks learned; the oracle learns nothing and writes none)
 
-Tick k needs the observation of tick k and, in bayes mode, the outcome of tick k-1, so the
-model has learned from k-1 before it recognises k, as in the in-process runner.
+Tick k needs the observation of tick k, which carries the outcome of tick k-1, so the model has
+learned from k-1 before it recognises k, as in the in-process runner.
 """
 
 from __future__ import annotations

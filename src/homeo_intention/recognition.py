@@ -54,7 +54,7 @@ def make_recognition(mode: str, sc: Scenario, **settings):
 
 
 class RecognitionHost:
-    """``homeo_intention`` without ROS: observation(k) (+ outcome(k-1) when learning) -> intention(k)."""
+    """``homeo_intention`` without ROS: observation(k) (carrying the outcome of k-1) -> intention(k)."""
 
     def __init__(self, sc: Scenario, mode: str, **settings):
         from homeo_msgs_py.graph import NODES
@@ -70,8 +70,8 @@ class RecognitionHost:
         self.part.check(codec.observation_from_fields(self.sc, None, fields))
 
     def _tick(self, k: int, inputs: dict) -> dict:
-        sc = self.sc
-        out = codec.outcome_from_fields(sc, inputs["outcome"]) if "outcome" in inputs else None
-        r = self.part.tick(codec.observation_from_fields(sc, None, inputs["observation"]), out)
+        sc, seen = self.sc, inputs["observation"]
+        out = codec.outcome_from_fields(sc, seen["outcome"]) if self.part.learns and "outcome" in seen else None
+        r = self.part.tick(codec.observation_from_fields(sc, None, seen), out)
         names = sc.intention_names
         return {"intention": names[r.intention], "posterior": dict(zip(names, r.posterior)), "mode": self.mode}

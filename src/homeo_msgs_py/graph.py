@@ -6,8 +6,11 @@ tick join from here, the tests' in-memory bus routes by it, and docs/GRAPH.md pr
 (``python -m homeo_msgs_py.graph``). Topic names are relative, so a namespace
 (``--ros-args -r __ns:=/r1``) moves a whole graph.
 
-Tick k of a node waits for each input at tick ``k + offset``: the drives node needs the outcome
-of the tick before (offset -1; tick 0 needs none).
+Tick k of a node waits for each input at tick ``k + offset``. What a node needs of other topics rides
+in the messages it reads (``Topic.carries``): the world and the observation of tick k carry the outcome
+of tick k-1 (tick 0 has none), so the drives node wakes twice a tick (world, intention), the intention
+and decision nodes once, and the critical path is the four hops world -> intention -> drives ->
+decision -> world.
 """
 
 from __future__ import annotations
@@ -30,6 +33,9 @@ class Topic:
     name: str  # relative ROS name
     schema: str  # homeo_msgs_py.schemas
     kind: str  # STATE or EVENT
+    # (key, offset) of another topic whose fields ride along, in a field of that key: the world of tick k
+    # carries the outcome of k-1, so a node needing both wakes once for them (one delivery, not two)
+    carries: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -60,11 +66,13 @@ class NodeDesc:
 
 
 TOPICS: dict[str, Topic] = {
-    "world": Topic("homeo/world", "homeo/world", STATE),
-    "observation": Topic("homeo/observation", "homeo/observation", EVENT),
+    "world": Topic("homeo/world", "homeo/world", STATE, carries=(("outcome", -1),)),
+    "observation": Topic("homeo/observation", "homeo/observation", EVENT, carries=(("outcome", -1),)),
     "intention": Topic("homeo/intention", "homeo/intention", STATE),
     "drives": Topic("homeo/drives", "homeo/drives", STATE),
     "action": Topic("homeo/action", "homeo/action", EVENT),
+    # read by no node of the graph (it rides in world and observation of the next tick): for people,
+    # recordings and replay
     "outcome": Topic("homeo/outcome", "homeo/outcome", EVENT),
     "run_status": Topic("homeo/run_status", "homeo/run_status", STATE),
     # what a robot asks of the devices around it (a player to play, a light to switch): for whoever
@@ -88,11 +96,10 @@ NODES: dict[str, NodeDesc] = {
                     ("~/reset",),
                     joins=False, external=("human_input",), executable="homeo-world-node"),
     "homeo_intention": NodeDesc("homeo_intention", "homeo_intention.node", "intention", ("intention",),
-                                (Input("observation"), Input("outcome", -1, learning_only=True)),
-                                ("~/save_model", "~/load_model"), executable="homeo-intention-node"),
+                                (Input("observation"),), ("~/save_model", "~/load_model"),
+                                executable="homeo-intention-node"),
     "homeo_drives": NodeDesc("homeo_drives", "homeo_decision.drives_node", "drives", ("drives",),
-                             (Input("world"), Input("intention"), Input("outcome", -1)),
-                             executable="homeo-drives-node"),
+                             (Input("world"), Input("intention")), executable="homeo-drives-node"),
     "homeo_decision": NodeDesc("homeo_decision", "homeo_decision.node", "decision", ("action",),
                                (Input("drives"),), ("~/save_q", "~/load_q", "~/reset"), executable="homeo-decision-node"),
 }
@@ -155,12 +162,14 @@ def describe() -> str:
     """The graph as a markdown table (docs/GRAPH.md)."""
     lines = ["| node | role | publishes | reads (tick offset) | services |", "|---|---|---|---|---|"]
     for n in NODES.values():
-        reads = ", ".join(f"{TOPICS[i.topic].name} ({i.offset:+d})" + (" bayes only" if i.learning_only else "")
-                          for i in n.inputs)
+        reads = ", ".join(f"{TOPICS[i.topic].name} ({i.offset:+d}" + "".join(
+            f", with {TOPICS[k].name} ({i.offset + off:+d})" for k, off in TOPICS[i.topic].carries) + ")"
+                          + (" bayes only" if i.learning_only else "") for i in n.inputs)
         lines.append(f"| {n.name} | {n.role} | {', '.join(TOPICS[t].name for t in n.publishes)} | {reads} | "
                      f"{', '.join(n.services) or '-'} |")
-    lines += ["", "| topic | schema | kind |", "|---|---|---|"]
-    lines += [f"| {t.name} | {t.schema} | {t.kind} |" for t in TOPICS.values()]
+    lines += ["", "| topic | schema | kind | carries |", "|---|---|---|---|"]
+    lines += [f"| {t.name} | {t.schema} | {t.kind} | "
+              f"{', '.join(f'{TOPICS[k].name} ({o:+d})' for k, o in t.carries) or '-'} |" for t in TOPICS.values()]
     return "\n".join(lines)
 
 

@@ -3,8 +3,8 @@
 DDS orders messages within a topic, not across topics: a node that needs the world of
 tick k, the intention of tick k and the outcome of tick k-1 may get them in any order.
 :class:`TickJoin` holds them until tick k is complete, then hands them over at once.
-``offsets`` says which tick of an input belongs to the node's tick: ``{"outcome": -1}``
-means tick k needs the outcome of k-1 (tick 0 needs none). A message of a tick already
+``offsets`` says which tick of an input belongs to the node's tick: ``{"world": 0}`` means tick k
+needs the world of k (an offset -1 would take the message of the tick before; tick 0 needs none). A message of a tick already
 handled is stale; one more than ``window`` ticks ahead cannot belong to this run.
 """
 
@@ -183,6 +183,9 @@ class LockstepDriver:
                 self.log(f"observing tick {self.tick} failed ({err}); retrying")
                 return
             world, seen = res
+            o = self._outcome
+            if o is not None and o[0] == self.tick - 1:  # tick k carries the outcome of k-1 (graph.Topic.carries)
+                world, seen = dict(world, outcome=o[1]), dict(seen, outcome=o[1])
             self.phase, self._since = "act", now
             self._observed = (seen, world)
             self.send("observation", self.tick, seen, self.run)  # first: the critical path starts here
@@ -241,9 +244,7 @@ class LockstepDriver:
         self._resent, self._since = True, now
         self.note("resent ticks")
         self.log(f"no action for tick {self.tick} within {self.timeout:g} s: sending the tick again")
-        if self._outcome is not None:
-            self.send("outcome", *self._outcome, self.run)
-        if self._observed is not None:
+        if self._observed is not None:  # the outcome of the tick before rides in them
             self.send("observation", self.tick, self._observed[0], self.run)
             self.send("world", self.tick, self._observed[1], self.run)
 
@@ -314,8 +315,8 @@ class LockstepDriver:
     def rejoin(self, run: int, tick: int, missed: int, elapsed: float = 0.0, outcome: tuple | None = None,
                done: bool = False) -> None:
         """Go on with run ``run`` at tick ``tick`` (a world node restarted mid-run; ``missed`` counts
-        the ticks lost meanwhile). The outcome of ``tick - 1`` goes out first: the robot nodes join
-        it into ``tick``. No ``start``: the run started long ago."""
+        the ticks lost meanwhile). The outcome of ``tick - 1`` rides in the world and observation of
+        ``tick``, as every tick's does. No ``start``: the run started long ago."""
         self._reset_run()
         self.run, self.tick, self.missed = run, tick, missed
         now = self.clock()
@@ -327,7 +328,6 @@ class LockstepDriver:
         self.log(f"run {run}: rejoined at tick {tick}, {missed} missed")
         if outcome is not None:
             self._outcome = (outcome[0], outcome[1])
-            self.send("outcome", outcome[0], outcome[1], self.run)
         self._observe()
 
     @property

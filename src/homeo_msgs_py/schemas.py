@@ -301,6 +301,18 @@ STAMP = _num(0.0, 1e12)  # the envelope's wall time, s
 DRIVE = _num(0.0, 100.0)
 ANY_NUMBER = _num(-1e9, 1e9)
 
+OUTCOME_FIELDS = {
+    "action": (_one_of("actions", nullable=True), True),
+    "feedback": (_feedback, True),
+    "proposal": (_one_of("actions", nullable=True), True),
+    "clarified_intention": (_one_of("intentions", nullable=True), True),
+    "body": (_map("drives", DRIVE, extra=ANY_NUMBER), False),  # body right after the action
+    # ground truth of the simulated human, for the metrics only (robot nodes never read it)
+    "truth": (_obj({"intention": (_one_of("intentions"), True), "expressed": (_bool, True),
+                    "satisfied": (_bool, True)}), False),
+}
+_OUTCOME = _obj(OUTCOME_FIELDS)
+
 SCHEMAS: dict[str, dict[str, tuple[Check, bool]]] = {
     # simulation or robot -> drives, decision: what the world looks like at the start of a tick
     "homeo/world": {
@@ -310,6 +322,7 @@ SCHEMAS: dict[str, dict[str, tuple[Check, bool]]] = {
         # body drives by name, plus raw readings (battery_percent, temperature_status, ...)
         "body": (_map("drives", DRIVE, extra=ANY_NUMBER), True),
         "final": (_bool, False),  # the run ends with this tick: learn, do not act
+        "outcome": (_OUTCOME, False),  # the outcome of tick k-1 (graph.Topic.carries; none at tick 0)
     },
     # simulation or robot -> intention: what the robot sees of the human this tick
     "homeo/observation": {
@@ -317,6 +330,7 @@ SCHEMAS: dict[str, dict[str, tuple[Check, bool]]] = {
         "gesture": (_symbol, False),
         "movement": (_symbol, False),
         "keyword": (_symbol, False),
+        "outcome": (_OUTCOME, False),  # the outcome of tick k-1: the intention its answer revealed
     },
     # intention -> drives: the recognised intention and its posterior (Eq 2.10)
     "homeo/intention": {
@@ -354,16 +368,7 @@ SCHEMAS: dict[str, dict[str, tuple[Check, bool]]] = {
         "final": (_bool, False),  # the run ended: no action, only the last drives
     },
     # simulation or robot -> everyone: what the action did and what the human said
-    "homeo/outcome": {
-        "action": (_one_of("actions", nullable=True), True),
-        "feedback": (_feedback, True),
-        "proposal": (_one_of("actions", nullable=True), True),
-        "clarified_intention": (_one_of("intentions", nullable=True), True),
-        "body": (_map("drives", DRIVE, extra=ANY_NUMBER), False),  # body right after the action
-        # ground truth of the simulated human, for the metrics only (robot nodes never read it)
-        "truth": (_obj({"intention": (_one_of("intentions"), True), "expressed": (_bool, True),
-                        "satisfied": (_bool, True)}), False),
-    },
+    "homeo/outcome": OUTCOME_FIELDS,
     # a person -> simulation (``--human person``): a wish, and the answer to the robot's last action.
     # Sent by hand (ros2 topic pub, homeo-topic pub, Foxglove), so the envelope may be left out:
     # ``homeo_msgs_py.human_input.decode_human_input``
