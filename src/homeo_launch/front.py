@@ -117,7 +117,7 @@ def graph_options(a, cls, sc, plan, durable: dict) -> GraphOptions:
                         intention=cls.INTENTIONS[a.intention], scenario=plan.scenario or a.scenario or "",
                         overrides=tuple(a.set) + tuple(plan.overrides.items()), load_q=a.load_q, save_q=a.save_q,
                         data_dir=a.data_dir, namespace=a.namespace, auth=not a.no_auth, companions=plan.companions,
-                        **durable)
+                        executor=a.executor, **durable)
 
 
 class Progress:

@@ -50,6 +50,7 @@ class GraphOptions:
     namespace: str = ""  # the whole graph under /namespace
     auth: bool = True  # the graph signs its messages (docs/SECURITY.md); --no-auth for debugging
     companions: tuple = ()  # world_api.Companion: processes beside the nodes (a stand-in robot), started first
+    executor: str = "events"  # every node's rclpy executor (node_base.EXECUTOR)
 
     @property
     def iterations(self) -> int:
@@ -66,7 +67,7 @@ def graph_specs(o: GraphOptions) -> list[NodeSpec]:
     from homeo_decision.node_runtime import overrides_param
 
     common = {"scenario": o.scenario or "", "overrides": overrides_param(dict(o.overrides)),
-              "data_dir": os.path.abspath(o.data_dir), "extra_readers": o.extra_readers}
+              "data_dir": os.path.abspath(o.data_dir), "extra_readers": o.extra_readers, "executor": o.executor}
     decision = dict(common, seed=o.seed, **o.learning)
     # where ~/save_q writes: the user's own paths (anywhere), '~' expanded by every front end (cli_args.user_path)
     q_path = o.save_q or o.load_q

@@ -15,6 +15,7 @@ from dataclasses import replace
 from homeo_decision.durable import CHECKPOINT_EVERY
 from homeo_msgs_py import data_dir
 from homeo_msgs_py.cli_args import UserError, user_path
+from homeo_msgs_py.node_base import EXECUTOR
 from homeo_msgs_py.params import ParamSpec, add_flag
 
 from .launch import PROG
@@ -32,6 +33,7 @@ def add_run_options(p, name: str) -> None:
     p.add_argument("--scenario", metavar="FILE", type=user_path, default=None,
                    help="scenario JSON (default: the thesis scenario)")
     add_flag(p, ACTION_TIMEOUT, default=ACTION_TIMEOUT.default)
+    add_flag(p, EXECUTOR, default=EXECUTOR.default)
     p.add_argument("--log-dir", metavar="DIR", type=user_path,
                    help="keep each node's log here (default: a temporary directory)")
     p.add_argument("--json", action="store_true", help="print the run's result as JSON")

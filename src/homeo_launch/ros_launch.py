@@ -28,6 +28,7 @@ from homeo_decision.world_api import ITERATIONS, RATE, SEED, registered, world_c
 from homeo_msgs_py.cli_args import user_path
 from homeo_msgs_py.graph import GRAPH, NODES, WORLD
 from homeo_msgs_py.learning import DOD, XI
+from homeo_msgs_py.node_base import EXECUTOR
 from homeo_msgs_py.params import ParamSpec
 
 from .options import MAX_RESTARTS
@@ -52,6 +53,7 @@ COMMON = (
     ("trace", "", "the world writes one JSON line per tick here"),
     ("checkpoints", "true", "write checkpoints under DATA_DIR/checkpoints (a respawned node rejoins from them)"),
     ("max_restarts", "3", MAX_RESTARTS.doc),
+    ("executor", "", EXECUTOR.doc),
     ("json", "false", "print the result as JSON"),
 )
 # the arguments that name the user's files: '~' is their home, as on homeo-launch's command line
@@ -97,7 +99,7 @@ def values(given: dict, world: str) -> dict:
     except WorldConfigError as exc:
         raise LaunchArgError(f"launch argument world: {exc}") from None
     own = {s.name: s for s in (*cls.PARAMS, *cls.LAUNCH)}
-    specs = {s.name: s for s in (*WORLD_PARAMS, *LEARNING, MAX_RESTARTS, *FLAGS, *own.values())}
+    specs = {s.name: s for s in (*WORLD_PARAMS, *LEARNING, MAX_RESTARTS, EXECUTOR, *FLAGS, *own.values())}
     out = dict(given)
     for name, text in given.items():
         if text == "" or name not in specs and name not in world_args(None):
@@ -164,8 +166,9 @@ def node_params(world: str, v: dict, session: str, spool: str, plan_) -> dict:
                      session=session, max_restarts=v["max_restarts"])
     params = {s.name: s.params for s in graph_specs(o) if s.argv is None}
     for prm in params.values():
-        if v["seed"] == "":
-            prm.pop(SEED.name, None)  # not given: the params file's, or the node's
+        for name in (SEED.name, EXECUTOR.name):
+            if v[name] == "":
+                prm.pop(name, None)  # not given: the params file's, or the node's
         prm["respawn_rejoins"] = bool(o.checkpoint_dir)
         if spool:
             prm["record_spool"] = spool

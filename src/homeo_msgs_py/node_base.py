@@ -22,6 +22,7 @@ from .auth import AuthError, load_signer
 from .cli_args import die_with_parent
 from .diagnostics import RejectLog
 from .graph import DIAGNOSTICS, LAUNCHER, NODES, RECORDER, SIGNED, TOPICS, min_readers, own_endpoints
+from .params import ParamSpec
 from .qos import pub_qos, quiet_pub_events, quiet_sub_events, sub_qos
 from .schemas import Message, Rejected, Vocabulary, decode, encode, one_line
 
@@ -118,14 +119,16 @@ class HomeoNode(Node):
         self.spool = self._open_spool(self.declare_fixed("record_spool", "", ParameterDescriptor(
             description="a folder (in data_dir) where this node appends every message it sends, for the launcher's "
                         "--record to merge into the bag after the run; '' = not recording; set at start")))
+        self.executor_kind = self.declare_specs((EXECUTOR,))[EXECUTOR.name]
         self.add_on_set_parameters_callback(self._guard_fixed)
         self._diag_pub = self.create_publisher(DiagnosticArray, DIAGNOSTICS, 10, event_callbacks=quiet_pub_events())
         self._diag_timer = self.create_timer(DIAG_PERIOD_S, self.publish_diagnostics)
-        # and one status as soon as the node spins: a run shorter than the period still has one
+        # and one status as soon as the node spins: a run shorter than the period still has one (the timer
+        # is cancelled, not destroyed, in its own callback: the events executor must not lose an entity then)
         self._first_diag = self.create_timer(0.0, self._publish_first_diagnostics)
 
     def _publish_first_diagnostics(self) -> None:
-        self.destroy_timer(self._first_diag)
+        self._first_diag.cancel()
         self.publish_diagnostics()
 
     # -- recording at the writers (homeo_msgs_py.spool) ----------------------------------------
@@ -379,6 +382,22 @@ def ros_args_refusal(args=None) -> str | None:
     return None
 
 
+# rclpy's EventsExecutor (default) or its SingleThreadedExecutor: docs/GRAPH.md, "The executor"
+EXECUTOR = ParamSpec("executor", "events", "the node's executor: rclpy's EventsExecutor (one wake a message, no wait "
+                     "set rebuilt) or its SingleThreadedExecutor", choices=("events", "single"), fixed=True)
+SPIN_S = 1.0  # the longest wait of one spin: the loop checks for shutdown this often at least
+
+
+def make_executor(kind: str):
+    if kind == "events":
+        from rclpy.experimental import EventsExecutor
+
+        return EventsExecutor()
+    from rclpy.executors import SingleThreadedExecutor
+
+    return SingleThreadedExecutor()
+
+
 def run_node(factory: Callable[[], Node], args=None, config_errors: tuple = ()) -> int:
     """Build the node, spin until Ctrl-C / SIGTERM / shutdown, always destroy it and shut down; exit
     code 0 however it was stopped (2: a bad start-up configuration). ``config_errors``: more
@@ -393,12 +412,15 @@ def run_node(factory: Callable[[], Node], args=None, config_errors: tuple = ()) 
     if refusal is not None:
         print(f"error: {refusal}", file=sys.stderr)
         return 2
-    rclpy.init(args=args)  # installs SIGINT/SIGTERM handlers that end spin()
+    rclpy.init(args=args)  # installs SIGINT/SIGTERM handlers that shut the context down
     node = None
     code = 0
     try:
         node = factory()
-        rclpy.spin(node)  # one SingleThreadedExecutor per process
+        executor = make_executor(node.executor_kind)  # one executor per process
+        executor.add_node(node)
+        while rclpy.ok():  # a finite timeout: the events executor spun without one never fires timers
+            executor.spin_once(timeout_sec=SPIN_S)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except (NodeConfigError, ParameterException, *config_errors) as exc:  # bad start-up configuration
