@@ -50,22 +50,23 @@ def _action(**over):
     return json.dumps(obj)
 
 
-@pytest.mark.parametrize("text, reason", [
+@pytest.mark.parametrize("text, reason", [  # each refusal says what and where, in msgspec's words
     ("not json {", "not JSON"),
     ("[1, 2]", "not a JSON object"),
     (_action(schema="homeo/nope"), "unknown schema"),
     (_action(version=2), "version 2"),
-    (_action(action="Dance"), "unknown action 'Dance'"),
-    (_action(tick=-1), "tick = -1 is below 0"),
-    (_action(tick="3"), "tick must be an integer"),
-    (_action(tau=float("inf")), "Infinity is not JSON"),
-    (_action(tau=1e308 * 10 if False else 1.0).replace("1.0}", "1e400}"), "out of range"),
-    (_action(tau=10 ** 400), "integer of 401 digits"),
+    (_action(action="Dance"), "Invalid enum value 'Dance' - at `$.action`"),
+    (_action(tick=-1), "Expected `int` >= 0 - at `$.tick`"),
+    (_action(tick="3"), "Expected `int`, got `str` - at `$.tick`"),
+    (_action(tau=float("inf")), "not JSON"),  # Infinity is not JSON
+    (_action(tau=1e308 * 10 if False else 1.0).replace("1.0}", "1e400}"), "Number out of range - at `$.tau`"),
+    (_action(tau=10 ** 400), "Number out of range - at `$.tau`"),
     (_action(schema=[]), "unknown schema"),
     (_action(schema={}), "unknown schema"),
-    ('{"\\ud800": 1}', "surrogate"),
-    (_action(extra=1), "unexpected field 'extra'"),
-    (json.dumps({"schema": "homeo/action", "version": 1, "run": 0, "tick": 0, "stamp": 1.0}), "missing field 'action'"),
+    ('{"\\ud800": 1}', "not JSON"),  # a lone surrogate
+    (_action(extra=1), "Object contains unknown field `extra`"),
+    (json.dumps({"schema": "homeo/action", "version": 1, "run": 0, "tick": 0, "stamp": 1.0}),
+     "Object missing required field `action`"),
 ])
 def test_bad_messages_are_rejected_with_a_reason(voc, text, reason):
     with pytest.raises(Rejected) as exc:
@@ -81,17 +82,17 @@ def test_wrong_schema_on_a_topic(voc):
 def test_scenario_values_are_checked(thesis, voc):
     w = _world(thesis)
     w["objects"]["light"]["status"] = "dim"
-    with pytest.raises(Rejected, match=r"objects.light.status = 'dim' is not one of off, on"):
+    with pytest.raises(Rejected, match=r"Invalid enum value 'dim' - at `\$.objects.light.status`"):
         decode(encode("homeo/world", 0, w), voc)
     w = _world(thesis)
     w["body"]["NEng"] = 140.0
     with pytest.raises(Rejected, match=r"body.NEng = 140.0 is outside \[0, 100\]"):
         decode(encode("homeo/world", 0, w), voc)
-    with pytest.raises(Rejected, match="unknown intention 'dance'"):
+    with pytest.raises(Rejected, match="Invalid enum value 'dance' - at `\\$.intention`"):
         decode(encode("homeo/intention", 0, {"intention": "dance", "posterior": {}, "mode": "oracle"}), voc)
     with pytest.raises(Rejected, match="sum to 0.500000"):
         decode(encode("homeo/intention", 0, {"intention": "come", "posterior": {"come": 0.5}, "mode": "oracle"}), voc)
-    with pytest.raises(Rejected, match=r"feedback must be \+1, -1 or 0"):
+    with pytest.raises(Rejected, match=r"Invalid enum value 2 - at `\$.feedback`"):
         decode(encode("homeo/outcome", 0, {"action": None, "feedback": 2, "proposal": None,
                                            "clarified_intention": None}), voc)
 
@@ -127,7 +128,7 @@ def test_a_world_whose_presence_contradicts_its_relation_is_refused(thesis, voc,
 def test_a_contradiction_names_both_values(thesis, voc):
     w = _world(thesis)
     w["human"] = {"presence": "absent", "relation": "near"}
-    with pytest.raises(Rejected, match="human: presence 'absent' contradicts relation 'near'"):
+    with pytest.raises(Rejected, match="presence 'absent' contradicts relation 'near' - at `\\$.human`"):
         decode(encode("homeo/world", 0, w), voc)
     with pytest.raises(ScenarioError, match="contradicts"):  # the codec refuses it too (an in-process world)
         world_code(thesis, w)

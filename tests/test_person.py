@@ -60,9 +60,12 @@ def test_valid_inputs_decode_to_what_they_say(thesis, intention, feedback, propo
 
 
 @pytest.mark.parametrize("text,words", [
-    ('{"feedback": "great"}', "praise"), ('{"intention": "pizza"}', "unknown intention"),
-    ('{"proposal": "Fly"}', "unknown action"), ('{"mood": "happy"}', "unexpected field"), ("{}", "says nothing"),
-    ('{"schema": "homeo/action", "feedback": "praise"}', "schema"), ("[1]", "not a JSON object"), ("x" * 5000, "too long"),
+    ('{"feedback": "great"}', "Invalid enum value 'great' - at `\\$.feedback`"),
+    ('{"intention": "pizza"}', "Invalid enum value 'pizza' - at `\\$.intention`"),
+    ('{"proposal": "Fly"}', "Invalid enum value 'Fly' - at `\\$.proposal`"),
+    ('{"mood": "happy"}', "Object contains unknown field `mood`"), ("{}", "says nothing"),
+    ('{"schema": "homeo/action", "feedback": "praise"}', "schema"), ("[1]", "Expected `object`, got `array`"),
+    ("x" * 5000, "too long"),
 ])
 def test_mistakes_are_named(thesis, text, words):
     with pytest.raises(Rejected, match=words):

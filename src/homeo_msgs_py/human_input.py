@@ -10,12 +10,20 @@ out of range are refused with a one-line reason (``Rejected``).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
-from .schemas import ENVELOPE, SCHEMAS, VERSION, Rejected, Vocabulary, _fields, parse_json
+import msgspec
+
+from .schemas import NOT_UNICODE, VERSION, Rejected, Vocabulary, anything, short
 
 SCHEMA = "homeo/human_input"
 MAX_TEXT = 4096  # a person's message is a line
 NONE_NAMES = (None, "none")
+PRAISE_SCOLD = {"praise": 1, "scold": -1}
+# the envelope a person may leave out: if there, it is this schema's; its run, tick and stamp are not
+# checked (a person does not count ticks: an input answers the tick that is waiting)
+ENVELOPE = {"schema": (lambda voc: Literal[SCHEMA], False), "version": (lambda voc: Literal[VERSION], False),
+            **{k: (anything, False) for k in ("run", "tick", "stamp")}}
 
 
 @dataclass(frozen=True)
@@ -27,18 +35,27 @@ class HumanInput:
 
 
 def decode_human_input(text, voc: Vocabulary) -> HumanInput:
-    obj = parse_json(text, MAX_TEXT, " for a person's input")
-    if not isinstance(obj, dict):
-        raise Rejected(f"not a JSON object but {type(obj).__name__}")
-    if "schema" in obj and obj["schema"] != SCHEMA:
-        raise Rejected(f"schema {obj['schema']!r} on a topic that carries {SCHEMA!r}")
-    if "version" in obj and obj["version"] != VERSION:
-        raise Rejected(f"{SCHEMA} version {obj['version']!r} is not {VERSION}")
-    body = {k: v for k, v in obj.items() if k not in ENVELOPE}
-    f = _fields(body, SCHEMAS[SCHEMA], voc, "")
+    if not isinstance(text, str):
+        raise Rejected("not a string")
+    if len(text) > MAX_TEXT:
+        raise Rejected(f"message of {len(text)} characters is too long for a person's input")
+    from .schemas import PAYLOADS
+
+    t = voc.struct("person input", PAYLOADS[SCHEMA], ENVELOPE)
+    try:
+        f = msgspec.to_builtins(msgspec.json.decode(text, type=t))
+    except msgspec.ValidationError as exc:
+        raise Rejected(short(str(exc))) from None
+    except msgspec.DecodeError as exc:
+        raise Rejected(short(f"not JSON ({exc})")) from None
+    except UnicodeEncodeError:
+        raise Rejected(NOT_UNICODE) from None
+    for k in ENVELOPE:
+        f.pop(k, None)
     if not f:
         raise Rejected("says nothing: give an intention, a feedback or a proposal")
     it = f.get("intention")
-    if f.get("proposal") is not None and f.get("feedback", 0) == 1:
+    fb = PRAISE_SCOLD.get(f.get("feedback"), f.get("feedback") or 0)  # "praise", "scold", +1, -1; null or 0: none
+    if f.get("proposal") is not None and fb == 1:
         raise Rejected("a proposal comes with a scold (or no feedback), not with praise")
-    return HumanInput(None if it in NONE_NAMES else it, "intention" in f, f.get("feedback", 0), f.get("proposal"))
+    return HumanInput(None if it in NONE_NAMES else it, "intention" in f, fb, f.get("proposal"))

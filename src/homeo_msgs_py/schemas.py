@@ -1,27 +1,32 @@
-"""The message contract: one JSON schema per payload, encode/decode with validation (no rclpy).
+"""The message contract, declared once (no rclpy): each payload's fields and their types.
 
 Every message is a ``std_msgs/msg/String`` whose ``data`` is one JSON object::
 
     {"schema": "homeo/world", "version": 1, "run": 0, "tick": 12, "stamp": 1700000000.25, ...fields}
 
-``run`` counts resets of the simulation (a node that sees a newer run starts its tick
-count again); ``tick`` is the lockstep tick the payload belongs to; ``stamp`` is wall time
-in seconds. Field values that name scenario things (actions, intentions, drives,
-locations, object states) are checked against the scenario, so a message from a
-different world is rejected instead of misread.
+``run`` counts resets of the simulation (a node that sees a newer run starts its tick count again);
+``tick`` is the lockstep tick the payload belongs to; ``stamp`` is wall time in seconds. Field values
+that name scenario things (actions, intentions, drives, locations, object states) are checked against
+the scenario, so a message from a different world is refused instead of misread.
 
-``decode`` raises :class:`Rejected` with a one-line reason; nodes count the reason and
-report it on ``/diagnostics`` (see ``homeo_msgs_py.diagnostics``) and keep running.
+``PAYLOADS`` declares every payload's fields as types of the scenario's vocabulary; from them msgspec
+builds, once per vocabulary, the Struct that decodes and validates a message in one pass in C
+(``decode``, ``validate``), and the JSON Schema that describes it (``json_schemas.py``, the live view).
+What a type cannot say (presence and relation agree, a posterior sums to 1, a body drive lies in
+[0, 100]) a payload's check says, in the same pass. ``decode`` raises :class:`Rejected` with a
+one-line reason; nodes count the reason and report it on ``/diagnostics`` and keep running.
 """
 
 from __future__ import annotations
 
-import json
 import math
-import re
 import time
 from dataclasses import dataclass
-from typing import Any, Callable
+from keyword import iskeyword
+from typing import Annotated, Any, Callable, Literal, Union
+
+import msgspec
+from msgspec import UNSET, Meta, UnsetType
 
 from .learning import LEARNING
 from .text import one_line  # noqa: F401  (imported from here by many modules)
@@ -30,18 +35,16 @@ VERSION = 1
 ENVELOPE = ("schema", "version", "run", "tick", "stamp")
 AUTH_KEY = "auth"  # the graph's signature, appended last (``auth.py``); not part of the fields
 
-# Limits of the decode boundary: every payload within them is decoded, every other is refused
-# with a reason. The largest message of the graph (a run status with its metrics) is about 3 kB.
+# Limits of the decode boundary: every payload within them is decoded, every other is refused with a
+# reason. The types bound every field but the run status's free ``metrics`` and ``extra``, whose
+# depth, size and numbers ``_tree`` bounds. The largest message (a run status with its log) is a few kB.
 MAX_TEXT = 64 * 1024  # characters of one message
 MAX_DEPTH = 8  # nesting of objects and arrays
 MAX_STR = 1024  # characters of one string or key
 MAX_ITEMS = 4096  # values in one message
-MAX_INT_DIGITS = 18  # |n| < 10**18: the ticks and runs of centuries of running
-_INT_LIMIT = 10 ** MAX_INT_DIGITS  # computed once: every number of every message is compared with it
+MAX_INT = 2**62  # the ticks and runs of centuries of running
 MAX_REASON = 200  # characters of a reason kept for /diagnostics and the log
-
-
-_SURROGATE = re.compile(r"\\u[dD][89a-fA-F][0-9a-fA-F]{2}")
+NOT_UNICODE = "a string that is not valid Unicode (a lone surrogate)"
 
 
 class Rejected(ValueError):
@@ -57,355 +60,241 @@ class Message:
     fields: dict
 
 
-# -- value checks -------------------------------------------------------------
-# A check takes (value, vocabulary, where) and returns the value kept or raises Rejected. Each also
-# carries ``check.json(voc)``: the JSON Schema of the values it accepts (``json_schemas.py`` walks
-# SCHEMAS with it, for viewers such as Foxglove). What a schema cannot say (probabilities that sum
-# to 1) only the check knows; a value the check accepts the schema accepts too.
-Check = Callable[[Any, "Vocabulary", str], Any]
+# -- field types: each a function of the vocabulary (the scenario's names) to a msgspec type ----------------
+Type = Callable[["Vocabulary"], Any]
 
 
-def _schema(of: Callable[["Vocabulary"], dict]):
-    """Attach ``of`` (vocabulary -> JSON Schema) to a check as its ``json``: a function attribute
-    costs the decode nothing."""
-    def attach(check):
-        check.json = of
-        return check
-    return attach
+def num(lo: float, hi: float) -> Type:
+    bounds = {k: x for k, x in (("ge", lo), ("le", hi)) if math.isfinite(x)}
+    return lambda voc: Annotated[float, Meta(**bounds)]
 
 
-def _bounds(lo: float, hi: float) -> dict:
-    return {k: x for k, x in (("minimum", lo), ("maximum", hi)) if math.isfinite(x)}
+def count(voc):
+    return Annotated[int, Meta(ge=0, le=MAX_INT)]
 
 
-def _num(lo: float, hi: float) -> Check:
-    @_schema(lambda voc: {"type": "number", **_bounds(lo, hi)})
-    def check(v, voc, where):
-        if isinstance(v, bool) or not isinstance(v, (int, float)):
-            raise Rejected(f"{where} must be a number, got {type(v).__name__}")
-        if isinstance(v, int) and abs(v) >= _INT_LIMIT:  # float() of it could overflow
-            raise Rejected(f"{where}: an integer of more than {MAX_INT_DIGITS} digits")
-        if not math.isfinite(v) or not lo <= v <= hi:
-            raise Rejected(f"{where} = {v} is outside [{lo:g}, {hi:g}]")
-        return float(v)
-    return check
+def boolean(voc):
+    return bool
 
 
-def _int(lo: int, hi: int) -> Check:
-    @_schema(lambda voc: {"type": "integer", "minimum": lo, "maximum": hi})
-    def check(v, voc, where):
-        if isinstance(v, bool) or not isinstance(v, int):
-            raise Rejected(f"{where} must be an integer, got {type(v).__name__}")
-        if not lo <= v <= hi:
-            raise Rejected(f"{where} = {v} is outside [{lo}, {hi}]" if hi < 2**53 else f"{where} = {v} is below {lo}")
-        return v
-    return check
+def text(voc):
+    return Annotated[str, Meta(max_length=MAX_STR)]
 
 
-@_schema(lambda voc: {"type": "boolean"})
-def _bool(v, voc, where):
-    if not isinstance(v, bool):
-        raise Rejected(f"{where} must be true or false, got {type(v).__name__}")
-    return v
+def symbol(voc):  # a cue: a short symbol or null
+    return Union[Annotated[str, Meta(min_length=1, max_length=64)], None]
 
 
-@_schema(lambda voc: {"type": "string"})
-def _str(v, voc, where):
-    if not isinstance(v, str):
-        raise Rejected(f"{where} must be a string, got {type(v).__name__}")
-    return v
+def feedback(voc):
+    return Literal[-1, 0, 1]
 
 
-def _one_of(kind: str, nullable: bool = False) -> Check:
+def anything(voc):  # bounded by ``_tree``
+    return Any
+
+
+def name(kind: str, nullable: bool = False) -> Type:
     """A name from the scenario vocabulary ``kind`` (actions, intentions, ...)."""
-    @_schema(lambda voc: {"enum": voc.names(kind) + [None]} if nullable else {"type": "string", "enum": list(voc.names(kind))})
-    def check(v, voc, where):
-        if v is None and nullable:
-            return None
-        known = voc.names(kind)
-        if not isinstance(v, str) or v not in known:
-            raise Rejected(f"{where}: unknown {kind[:-1]} {v!r}; known: {', '.join(known)}")
-        return v
-    return check
+    def of(voc):
+        names = tuple(voc.names(kind))
+        t = Literal[names] if names else Annotated[str, Meta(pattern="(?!)")]  # no names: nothing is one
+        return Union[t, None] if nullable else t
+    return of
 
 
-@_schema(lambda voc: {"enum": [-1, 0, 1]})
-def _feedback(v, voc, where):
-    if isinstance(v, bool) or v not in (-1, 0, 1):
-        raise Rejected(f"{where} must be +1, -1 or 0, got {v!r}")
-    return int(v)
-
-
-def _map(key_kind: str, value: Check, complete: bool = False, extra: Check | None = None) -> Check:
-    """A JSON object keyed by names of ``key_kind``; ``extra`` admits other keys (e.g. raw readings)."""
-    def schema(voc):
-        names = voc.names(key_kind)
-        out = {"type": "object", "properties": {n: value.json(voc) for n in names},
-               "additionalProperties": extra.json(voc) if extra is not None else False}
-        return out | ({"required": list(names)} if complete else {})
-
-    @_schema(schema)
-    def check(v, voc, where):
-        if not isinstance(v, dict):
-            raise Rejected(f"{where} must be an object, got {type(v).__name__}")
-        known = voc.names(key_kind)
-        out = {}
-        for k, x in v.items():
-            if k in known:
-                out[k] = value(x, voc, f"{where}.{k}")
-            elif extra is not None:
-                out[k] = extra(x, voc, f"{where}.{k}")
-            else:
-                raise Rejected(f"{where}: unknown {key_kind[:-1]} {k!r}; known: {', '.join(known)}")
+def drives(complete: bool) -> Type:
+    """Drive values in [0, 100] by drive name: every drive (``complete``) or some."""
+    def of(voc):
         if complete:
-            missing = [k for k in known if k not in out]
-            if missing:
-                raise Rejected(f"{where}: missing {', '.join(missing)}")
-        return out
-    return check
+            return voc.struct("drives", {d: (num(0.0, 100.0), True) for d in voc.names("drives")})
+        return dict[name("drives")(voc), Annotated[float, Meta(ge=0.0, le=100.0)]]
+    return of
 
 
-def object_schema(spec: dict[str, tuple[Check, bool]], voc: "Vocabulary") -> dict:
-    """The JSON Schema of an object of named fields (a payload, a nested object)."""
-    return {"type": "object", "properties": {k: c.json(voc) for k, (c, _) in spec.items()},
-            "required": [k for k, (_, required) in spec.items() if required], "additionalProperties": False}
+def by_name(kind: str, value: Type) -> Type:
+    return lambda voc: dict[name(kind)(voc), value(voc)]
 
 
-def _obj(spec: dict[str, tuple[Check, bool]]) -> Check:
-    """A nested object with named fields; ``(check, required)`` per field; no unknown keys."""
-    @_schema(lambda voc: object_schema(spec, voc))
-    def check(v, voc, where):
-        if not isinstance(v, dict):
-            raise Rejected(f"{where} must be an object, got {type(v).__name__}")
-        return _fields(v, spec, voc, where)
-    return check
+def obj(spec: dict, title: str) -> Type:
+    """A nested object of named fields, ``{name: (type, required)}``; no unknown keys."""
+    return lambda voc: voc.struct(title, spec)
 
 
-def _fields(v: dict, spec, voc, where: str) -> dict:
-    out = {}
-    for k, x in v.items():
-        if k not in spec:
-            raise Rejected(f"{where}: unexpected field {k!r}")
-        out[k] = spec[k][0](x, voc, f"{where}.{k}" if where else k)
-    for k, (_, required) in spec.items():
-        if required and k not in out:
-            raise Rejected(f"{where + ': ' if where else ''}missing field {k!r}")
-    return out
-
-
-def _objects_schema(voc: "Vocabulary") -> dict:
-    objects = voc.object_vars
-    return {"type": "object", "additionalProperties": False, "required": list(objects), "properties": {
-        o: {"type": "object", "additionalProperties": False, "required": list(vars_),
-            "properties": {var: {"enum": list(values)} for var, values in vars_.items()}}
-        for o, vars_ in objects.items()}}
-
-
-@_schema(_objects_schema)
-def _objects(v, voc, where):
+def objects(voc):
     """``{"charger": {"status": "idle"}, ...}``: every scenario object with every variable."""
-    if not isinstance(v, dict):
-        raise Rejected(f"{where} must be an object, got {type(v).__name__}")
-    out = {}
-    for o, vars_ in voc.object_vars.items():
-        got = v.get(o)
-        if not isinstance(got, dict):
-            raise Rejected(f"{where}: missing object {o!r}" if got is None else f"{where}.{o} must be an object")
-        out[o] = {}
-        for var, values in vars_.items():
-            x = got.get(var)
-            if x not in values:
-                raise Rejected(f"{where}.{o}.{var} = {x!r} is not one of {', '.join(values)}")
-            out[o][var] = x
-        unknown = set(got) - set(vars_)
-        if unknown:
-            raise Rejected(f"{where}.{o}: unknown variable {sorted(unknown)[0]!r}")
-    unknown = set(v) - set(voc.object_vars)
-    if unknown:
-        raise Rejected(f"{where}: unknown object {sorted(unknown)[0]!r}; known: {', '.join(voc.object_vars)}")
-    return out
+    return voc.struct("objects", {o: (obj({v: ((lambda vals: lambda voc: Literal[tuple(vals)])(vals), True)
+                                           for v, vals in vars_.items()}, f"object {o}"), True)
+                                  for o, vars_ in voc.object_vars.items()})
 
 
-_HUMAN_FIELDS = _obj({"presence": (_one_of("presences"), True), "relation": (_one_of("relations"), True)})
-_ABSENT = "absent"  # the one value presence and relation share: each is absent iff the other is
+def body(voc):
+    """Body drives by name, plus raw readings (battery_percent, temperature_status, ...): numbers."""
+    return dict[Annotated[str, Meta(max_length=64)], Annotated[float, Meta(ge=-1e9, le=1e9)]]
 
 
-def _human_json(voc) -> dict:
-    """Presence and relation, and their agreement: both absent, or neither."""
-    both = {k: {"const": _ABSENT} for k in ("presence", "relation")}
-    neither = {k: {"not": {"const": _ABSENT}} for k in ("presence", "relation")}
-    return dict(_HUMAN_FIELDS.json(voc), oneOf=[{"properties": both}, {"properties": neither}])
-
-
-@_schema(_human_json)
-def _human(v, voc, where):
-    """The human of a world: presence and relation, which must agree (absent iff absent)."""
-    out = _HUMAN_FIELDS(v, voc, where)
-    if (out["presence"] == _ABSENT) != (out["relation"] == _ABSENT):
-        raise Rejected(f"{where}: presence {out['presence']!r} contradicts relation {out['relation']!r}")
-    return out
-
-
-@_schema(lambda voc: {"type": ["string", "null"], "minLength": 1, "maxLength": 64})
-def _symbol(v, voc, where):
-    if v is not None and (not isinstance(v, str) or not v or len(v) > 64):
-        raise Rejected(f"{where} must be a short symbol or null, got {v!r}")
-    return v
-
-
-def _prob_map(kind: str) -> Check:
-    probabilities = _map(kind, _num(0.0, 1.0))
-
-    @_schema(probabilities.json)  # that they sum to 1 only the check says
-    def check(v, voc, where):
-        out = probabilities(v, voc, where)
-        s = sum(out.values())
-        if out and abs(s - 1.0) > 1e-6:
-            raise Rejected(f"{where}: probabilities sum to {s:.6f}, not 1")
-        return out
-    return check
-
-
-PRAISE_SCOLD = {"praise": 1, "scold": -1}
-
-
-@_schema(lambda voc: {"enum": list(PRAISE_SCOLD) + [None, -1, 0, 1]})
-def _praise_scold(v, voc, where):
-    """A person's answer: "praise" or "scold" (or +1 / -1), null or 0 for none; kept as +1/-1/0."""
-    if v is None:
-        return 0
-    if isinstance(v, str) and v in PRAISE_SCOLD:
-        return PRAISE_SCOLD[v]
-    if not isinstance(v, bool) and v in (-1, 0, 1):
-        return int(v)
-    raise Rejected(f"{where} must be \"praise\", \"scold\" or null, got {v!r}")
-
-
-@_schema(lambda voc: {})
-def _any_json(v, voc, where):
-    return v
-
-
-def _param(spec) -> Check:
-    """A parameter's value as its declaration (``params.ParamSpec``) takes it: a number in its range,
-    a truth value."""
-    if spec.kind is float:
-        return _num(-math.inf if spec.lo is None else spec.lo, math.inf if spec.hi is None else spec.hi)
-    if spec.kind is bool:
-        return _bool
-    raise TypeError(f"parameter {spec.name}: no message check for {spec.kind.__name__}")
-
-
-COUNT = _int(0, 2**62)  # the envelope's run and tick
-STAMP = _num(0.0, 1e12)  # the envelope's wall time, s
-DRIVE = _num(0.0, 100.0)
-ANY_NUMBER = _num(-1e9, 1e9)
-
-OUTCOME_FIELDS = {
-    "action": (_one_of("actions", nullable=True), True),
-    "feedback": (_feedback, True),
-    "proposal": (_one_of("actions", nullable=True), True),
-    "clarified_intention": (_one_of("intentions", nullable=True), True),
-    "body": (_map("drives", DRIVE, extra=ANY_NUMBER), False),  # body right after the action
+HUMAN = {"presence": (name("presences"), True), "relation": (name("relations"), True)}
+WORLD_STATE = {"robot": (obj({"location": (name("locations"), True)}, "robot"), True),
+               "objects": (objects, True), "human": (obj(HUMAN, "human"), True)}
+OUTCOME = {
+    "action": (name("actions", nullable=True), True),
+    "feedback": (feedback, True),
+    "proposal": (name("actions", nullable=True), True),
+    "clarified_intention": (name("intentions", nullable=True), True),
+    "body": (body, False),  # body right after the action
     # ground truth of the simulated human, for the metrics only (robot nodes never read it)
-    "truth": (_obj({"intention": (_one_of("intentions"), True), "expressed": (_bool, True),
-                    "satisfied": (_bool, True)}), False),
+    "truth": (obj({"intention": (name("intentions"), True), "expressed": (boolean, True),
+                   "satisfied": (boolean, True)}, "truth"), False),
 }
-_OUTCOME = _obj(OUTCOME_FIELDS)
 
-SCHEMAS: dict[str, dict[str, tuple[Check, bool]]] = {
-    # simulation or robot -> drives, decision: what the world looks like at the start of a tick
-    "homeo/world": {
-        "robot": (_obj({"location": (_one_of("locations"), True)}), True),
-        "objects": (_objects, True),
-        "human": (_human, True),
-        # body drives by name, plus raw readings (battery_percent, temperature_status, ...)
-        "body": (_map("drives", DRIVE, extra=ANY_NUMBER), True),
-        "final": (_bool, False),  # the run ends with this tick: learn, do not act
-        "outcome": (_OUTCOME, False),  # the outcome of tick k-1 (graph.Topic.carries; none at tick 0)
-    },
+
+def _param(spec) -> Type:
+    """A learning parameter's value as its declaration (``params.ParamSpec``) takes it."""
+    if spec.kind is bool:
+        return boolean
+    return num(-math.inf if spec.lo is None else spec.lo, math.inf if spec.hi is None else spec.hi)
+
+
+PAYLOADS: dict[str, dict[str, tuple[Type, bool]]] = {
+    # simulation or robot -> intention, drives: what the world looks like at the start of a tick
+    "homeo/world": dict(WORLD_STATE, **{
+        "body": (body, True),
+        "final": (boolean, False),  # the run ends with this tick: learn, do not act
+        "outcome": (obj(OUTCOME, "outcome"), False),  # the outcome of tick k-1 (graph.Topic.carries; none at 0)
+    }),
     # simulation or robot -> intention: what the robot sees of the human this tick
     "homeo/observation": {
-        "intention": (_one_of("intentions", nullable=True), False),  # oracle mode: observed directly
-        "gesture": (_symbol, False),
-        "movement": (_symbol, False),
-        "keyword": (_symbol, False),
-        "outcome": (_OUTCOME, False),  # the outcome of tick k-1: the intention its answer revealed
+        "intention": (name("intentions", nullable=True), False),  # oracle mode: observed directly
+        "gesture": (symbol, False),
+        "movement": (symbol, False),
+        "keyword": (symbol, False),
+        "outcome": (obj(OUTCOME, "outcome"), False),  # the outcome of tick k-1: the intention it revealed
     },
     # intention -> drives: the recognised intention and its posterior (Eq 2.10)
     "homeo/intention": {
-        "intention": (_one_of("intentions"), True),
-        "posterior": (_prob_map("intentions"), True),
-        "mode": (_one_of("modes"), True),
+        "intention": (name("intentions"), True),
+        "posterior": (by_name("intentions", num(0.0, 1.0)), True),
+        "mode": (name("modes"), True),
     },
     # drives -> decision: drives, stimuli, intensities (Eq 3.2), dominant motivation (Eq 3.3)
     "homeo/drives": {
-        "drives": (_map("drives", DRIVE, complete=True), True),
-        "stimuli": (_map("motivations", ANY_NUMBER, complete=True), True),
-        "intensities": (_map("motivations", ANY_NUMBER, complete=True), True),
-        "m_dom": (_one_of("internal_states"), True),
-        "intention": (_one_of("intentions"), True),  # the one the stimuli were computed with
-        # the world these drives were perceived in (robot, objects, human of homeo/world)
-        "world": (_obj({"robot": (_obj({"location": (_one_of("locations"), True)}), True),
-                        "objects": (_objects, True),
-                        "human": (_human, True)}), True),
-        "after_action": (_map("drives", DRIVE, complete=True), False),  # drives before the time step
+        "drives": (drives(complete=True), True),
+        "stimuli": (obj({m: (num(-1e9, 1e9), True) for m in ()}, "stimuli"), True),  # replaced per vocabulary
+        "intensities": (obj({}, "intensities"), True),
+        "m_dom": (name("internal_states"), True),
+        "intention": (name("intentions"), True),  # the one the stimuli were computed with
+        "world": (obj(WORLD_STATE, "perceived world"), True),  # the world these drives were perceived in
+        "after_action": (drives(complete=True), False),  # drives before the time step
         # what tick k-1's action did, as these drives took it in: the decision learns from it
-        "outcome": (_obj({"action": (_one_of("actions", nullable=True), True), "feedback": (_feedback, True),
-                          "proposal": (_one_of("actions", nullable=True), True)}), False),
-        "final": (_bool, False),
+        "outcome": (obj({"action": (name("actions", nullable=True), True), "feedback": (feedback, True),
+                         "proposal": (name("actions", nullable=True), True)}, "learned outcome"), False),
+        "final": (boolean, False),
     },
     # decision -> simulation or robot: the chosen action (null = none) and the drives it was chosen with
     "homeo/action": {
-        "action": (_one_of("actions", nullable=True), True),
-        "m_dom": (_one_of("internal_states"), False),
-        "tau": (_num(0.0, 1e6), False),
+        "action": (name("actions", nullable=True), True),
+        "m_dom": (name("internal_states"), False),
+        "tau": (num(0.0, 1e6), False),
         # the learning parameters in force, as declared (homeo_msgs_py.learning)
-        "params": (_obj({spec.name: (_param(spec), True) for spec in LEARNING}), False),
-        "drives": (_map("drives", DRIVE, complete=True), False),  # the drives the choice was made with
-        "intention": (_one_of("intentions"), False),  # the recognised intention it was made for
-        "after_action": (_map("drives", DRIVE, complete=True), False),
-        "final": (_bool, False),  # the run ended: no action, only the last drives
+        "params": (obj({spec.name: (_param(spec), True) for spec in LEARNING}, "params"), False),
+        "drives": (drives(complete=True), False),  # the drives the choice was made with
+        "intention": (name("intentions"), False),  # the recognised intention it was made for
+        "after_action": (drives(complete=True), False),
+        "final": (boolean, False),  # the run ended: no action, only the last drives
     },
     # simulation or robot -> everyone: what the action did and what the human said
-    "homeo/outcome": OUTCOME_FIELDS,
-    # a person -> simulation (``--human person``): a wish, and the answer to the robot's last action.
-    # Sent by hand (ros2 topic pub, homeo-topic pub, Foxglove), so the envelope may be left out:
-    # ``homeo_msgs_py.human_input.decode_human_input``
-    "homeo/human_input": {
-        "intention": (_one_of("intentions", nullable=True), False),  # null or "none": no wish
-        "feedback": (_praise_scold, False),
-        "proposal": (_one_of("actions", nullable=True), False),
-    },
+    "homeo/outcome": OUTCOME,
     # world -> a person in the loop: the action being performed, and what the robot chose it for
     "homeo/last_action": {
-        "action": (_one_of("actions", nullable=True), True),  # null: nothing (no action came)
-        "intention": (_one_of("intentions"), False),  # the recognised intention it was chosen for
-        "m_dom": (_one_of("internal_states"), False),
+        "action": (name("actions", nullable=True), True),  # null: nothing (no action came)
+        "intention": (name("intentions"), False),  # the recognised intention it was chosen for
+        "m_dom": (name("internal_states"), False),
     },
     # world -> the devices around the robot: a command its config maps an action to (play, switch on)
     "homeo/device": {
-        "device": (_str, True),
-        "command": (_str, True),
-        "action": (_one_of("actions", nullable=True), True),  # the action being performed
+        "device": (text, True),
+        "command": (text, True),
+        "action": (name("actions", nullable=True), True),  # the action being performed
     },
     # world -> launcher: progress and, at the end, the run's metrics
     "homeo/run_status": {
-        "iterations": (_int(0, 2**62), True),
-        "done": (_bool, True),
-        "missed": (_int(0, 2**62), True),
-        "state": (_str, True),
-        "metrics": (_any_json, False),
-        "extra": (_any_json, False),
+        "iterations": (count, True),
+        "done": (boolean, True),
+        "missed": (count, True),
+        "state": (text, True),
+        "metrics": (anything, False),
+        "extra": (anything, False),
+    },
+    # a person -> simulation (``--human person``): typed by hand, so the envelope may be left out
+    # (``human_input.decode_human_input``)
+    "homeo/human_input": {
+        "intention": (name("intentions", nullable=True), False),  # null or "none": no wish
+        "feedback": (lambda voc: Union[Literal["praise", "scold", -1, 0, 1], None], False),
+        "proposal": (name("actions", nullable=True), False),
     },
 }
+# the motivations' stimuli and intensities: one number per motivation, every one
+for _k in ("stimuli", "intensities"):
+    PAYLOADS["homeo/drives"][_k] = ((lambda k: lambda voc: voc.struct(
+        k, {m: (num(-1e9, 1e9), True) for m in voc.names("motivations")}))(_k), True)
+SCHEMAS = PAYLOADS  # the payloads' field names, by schema (homeo-topic, the docs)
+ABSENT = "absent"  # the one value presence and relation share: each is absent iff the other is
+
+
+# -- what a type cannot say, checked in the same pass (a Struct's __post_init__) ------------------------------
+def _human(h) -> None:
+    if (h.presence == ABSENT) != (h.relation == ABSENT):
+        raise ValueError(f"presence {h.presence!r} contradicts relation {h.relation!r}")
+
+
+def _posterior(p) -> None:
+    s = sum(p.posterior.values())
+    if p.posterior and abs(s - 1.0) > 1e-6:
+        raise ValueError(f"posterior: probabilities sum to {s:.6f}, not 1")
+
+
+def _bodies(voc):
+    known = set(voc.names("drives"))
+
+    def check(p) -> None:
+        for part in (p, getattr(p, "outcome", None)):
+            for k, v in (getattr(part, "body", None) or {}).items():
+                if k in known and not 0.0 <= v <= 100.0:
+                    raise ValueError(f"body.{k} = {v} is outside [0, 100]")
+    return check
+
+
+def _tree(p) -> None:
+    """The free JSON of a run status: depth, size, string length, integer size."""
+    stack, n = [(p.metrics, 1), (p.extra, 1)], 0
+    while stack:
+        v, depth = stack.pop()
+        n += 1
+        if n > MAX_ITEMS:
+            raise ValueError(f"more than {MAX_ITEMS} values")
+        if isinstance(v, (dict, list)):
+            if depth > MAX_DEPTH:
+                raise ValueError(f"nested deeper than {MAX_DEPTH}")
+            items = list(v.items()) if isinstance(v, dict) else [(None, x) for x in v]
+            for k, x in items:
+                if k is not None and len(k) > MAX_STR:
+                    raise ValueError(f"a key of {len(k)} characters (at most {MAX_STR})")
+                stack.append((x, depth + 1))
+        elif isinstance(v, str) and len(v) > MAX_STR:
+            raise ValueError(f"a string of {len(v)} characters (at most {MAX_STR})")
+        elif isinstance(v, int) and not isinstance(v, bool) and abs(v) > MAX_INT:
+            raise ValueError(f"an integer beyond {MAX_INT}")
+
+
+CHECKS = {"human": [_human], "homeo/intention": [_posterior], "homeo/run_status": [_tree],
+          "homeo/world": ["body"], "homeo/observation": ["body"], "homeo/outcome": ["body"]}
 
 
 class Vocabulary:
     """The names that message fields may take: ``kind -> names`` (actions, intentions, drives,
     motivations, locations, presences, relations, modes) and ``object_vars``: object -> variable ->
-    values. ``homeo_decision.codec.vocabulary(scenario)`` builds the one of a scenario; without
-    names only the envelope and the scenario-free schemas (run_status) can be checked."""
+    values. ``homeo_decision.codec.vocabulary(scenario)`` builds the one of a scenario; without names
+    only the scenario-free schemas (run_status) can be checked. It keeps the Structs and decoders
+    msgspec builds for it (once each)."""
 
     def __init__(self, object_vars: dict | None = None, **names):
         from .graph import INTENTION_MODES
@@ -415,9 +304,50 @@ class Vocabulary:
         # m_dom's values: the motivations, unless the scenario adds "none" (no_activated_motivation)
         self._names.setdefault("internal_states", self._names.get("motivations", []))
         self.object_vars: dict[str, dict[str, list[str]]] = object_vars or {}
+        self._structs: dict = {}
+        self._decoders: dict = {}
 
     def names(self, kind: str) -> list[str]:
         return self._names.get(kind, [])
+
+    def struct(self, title: str, spec: dict, envelope: dict | None = None) -> type:
+        """The msgspec Struct of an object of named fields ``{name: (type, required)}`` (its fields
+        renamed to the JSON keys, which need not be identifiers); built once per vocabulary."""
+        if title not in self._structs:  # a title names one object's fields
+            fields = dict(envelope or {}, **spec)
+            attr = {k: k if k.isidentifier() and not iskeyword(k) and not k.startswith("_") else f"f{i}"
+                    for i, k in enumerate(fields)}
+            req = [(attr[k], t(self), k) for k, (t, r) in fields.items() if r]
+            opt = [(attr[k], Union[t(self), UnsetType], k) for k, (t, r) in fields.items() if not r]
+            checks = [_bodies(self) if c == "body" else c for c in CHECKS.get(title, ())]
+            ns = {"__post_init__": _run(checks)} if checks else {}
+            self._structs[title] = msgspec.defstruct(
+                title.replace("/", "_").replace(" ", "_"), [(f, t) for f, t, _ in req] + [(f, t, UNSET) for f, t, _ in opt],
+                rename={f: k for f, _, k in req + opt}, forbid_unknown_fields=True, namespace=ns)
+        return self._structs[title]
+
+    def message(self, schema: str) -> type:
+        """The Struct of a whole message of ``schema``: the envelope and the payload's fields."""
+        env = {"schema": (lambda voc: Literal[schema], True), "version": (lambda voc: Literal[VERSION], True),
+               "run": (count, True), "tick": (count, True), "stamp": (num(0.0, 1e12), True)}
+        return self.struct(schema, PAYLOADS[schema], env)
+
+    def decoder(self, schema: str) -> msgspec.json.Decoder:
+        if schema not in self._decoders:
+            self._decoders[schema] = msgspec.json.Decoder(self.message(schema))
+        return self._decoders[schema]
+
+
+def _run(checks: list) -> Callable:
+    def post_init(self) -> None:
+        for c in checks:
+            c(self)
+    return post_init
+
+
+
+# -- encode, decode ---------------------------------------------------------------------------------
+_ENCODER = msgspec.json.Encoder()  # a NaN or an infinity (a metric of no samples) goes out as null
 
 
 def encode(schema: str, tick: int, fields: dict, run: int = 0, stamp: float | None = None) -> str:
@@ -425,10 +355,7 @@ def encode(schema: str, tick: int, fields: dict, run: int = 0, stamp: float | No
     env = {"schema": schema, "version": VERSION, "run": run, "tick": tick,
            "stamp": time.time() if stamp is None else stamp}
     env.update(fields)
-    try:
-        return json.dumps(env, separators=(",", ":"), allow_nan=False)
-    except ValueError:  # a NaN or an infinity in the fields (a metric of no samples): null
-        return json.dumps(finite(env), separators=(",", ":"), allow_nan=False)
+    return _ENCODER.encode(env).decode()
 
 
 def finite(obj):
@@ -449,105 +376,81 @@ def short(text: str, limit: int = MAX_REASON) -> str:
     return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
-def _parse_constant(name: str):
-    raise Rejected(f"{name} is not JSON (use null)")
-
-
-def _check_tree(value: Any, text: str) -> None:
-    """Depth, number of values, string length, integer size and finite numbers of ``value``,
-    parsed from ``text``. The text's length says whether a string or the count can break a limit
-    (parse hooks per number would cost three times the parse)."""
-    strings = len(text) > MAX_STR
-    count = text.count(",") + text.count(":") + 1 >= MAX_ITEMS  # a bound on the number of values
-    n = 0
-    stack = [(value, 1)]
-    while stack:
-        v, depth = stack.pop()
-        t = type(v)
-        if t is dict or t is list:
-            if depth > MAX_DEPTH:
-                raise Rejected(f"nested deeper than {MAX_DEPTH}")
-            if t is dict:
-                if strings:
-                    for k in v:
-                        if len(k) > MAX_STR:
-                            raise Rejected(f"a key of {len(k)} characters (at most {MAX_STR})")
-                items = v.values()
-            else:
-                items = v
-            if count:
-                n += len(v)
-                if n > MAX_ITEMS:
-                    raise Rejected(f"more than {MAX_ITEMS} values")
-            for x in items:
-                tx = type(x)
-                if tx is dict or tx is list:
-                    stack.append((x, depth + 1))
-                elif tx is str:
-                    if strings and len(x) > MAX_STR:
-                        raise Rejected(f"a string of {len(x)} characters (at most {MAX_STR})")
-                elif tx is float:
-                    if x - x != 0.0:  # inf (1e999 parses to it) or nan
-                        raise Rejected("a number out of range")
-                elif tx is int and not -_INT_LIMIT < x < _INT_LIMIT:
-                    _check_number(x)
-        elif t is str:
-            if len(v) > MAX_STR:
-                raise Rejected(f"a string of {len(v)} characters (at most {MAX_STR})")
-        elif t is int or t is float:
-            _check_number(v)
-
-
-def _check_number(x) -> None:
-    if type(x) is float:
-        if x - x != 0.0:  # inf (1e999 parses to it) or nan
-            raise Rejected("a number out of range")
-    elif not -_INT_LIMIT < x < _INT_LIMIT:
-        raise Rejected(f"an integer of {len(str(abs(x)))} digits (at most {MAX_INT_DIGITS})")
-
-
 def parse_json(text, limit: int = MAX_TEXT, what: str = "") -> Any:
-    """The JSON value of a message's text, or :class:`Rejected` with the reason: not a string,
-    too long, not JSON, or beyond a limit (depth, string length, integer digits, non-finite
-    numbers, text that is not valid Unicode)."""
+    """The JSON value of a message's text (no schema), or :class:`Rejected` with the reason."""
     if not isinstance(text, str):
         raise Rejected("not a string")
     if len(text) > limit:
         raise Rejected(f"message of {len(text)} characters is too long{what}")
-    if "\\u" in text and _SURROGATE.search(text):
-        raise Rejected("a \\u escape of a surrogate (send the character itself)")
     try:
-        value = json.loads(text, parse_constant=_parse_constant)
-    except Rejected:
-        raise
-    except RecursionError:  # the parser's own limit (about 1000 levels)
-        raise Rejected(f"nested deeper than {MAX_DEPTH}") from None
-    except ValueError as exc:  # JSONDecodeError is one; so is an integer of more than 4300 digits
-        if "digits" in str(exc):
-            raise Rejected(f"an integer of more than 4300 digits (at most {MAX_INT_DIGITS})") from None
-        raise Rejected(short(f"not JSON ({exc.msg if hasattr(exc, 'msg') else exc})")) from None
-    _check_tree(value, text)
-    return value
+        return msgspec.json.decode(text)
+    except RecursionError:
+        raise Rejected("nested too deep") from None
+    except UnicodeEncodeError:
+        raise Rejected(NOT_UNICODE) from None
+    except msgspec.DecodeError as exc:  # a ValidationError too: a number out of range
+        raise Rejected(short(f"not JSON ({exc})")) from None
+
+
+def _envelope_reason(obj, expect: str | None) -> str | None:
+    """A friendlier reason than the type's for a message of another schema or version."""
+    if not isinstance(obj, dict):
+        return f"not a JSON object but {type(obj).__name__}"
+    schema = obj.get("schema")
+    if not isinstance(schema, str) or schema not in PAYLOADS or schema == "homeo/human_input":
+        return short(f"unknown schema {schema!r}")
+    if expect is not None and schema != expect:
+        return f"schema {schema!r} on a topic that carries {expect!r}"
+    if obj.get("version") != VERSION:
+        return short(f"{schema} version {obj.get('version')!r} is not {VERSION}")
+    return None
+
+
+def _message(m, schema: str) -> Message:
+    fields = msgspec.to_builtins(m)
+    for k in ENVELOPE:
+        del fields[k]
+    return Message(schema, m.run, m.tick, m.stamp, fields)
 
 
 def decode(text: str, voc: Vocabulary, expect: str | None = None) -> Message:
-    """Parse and validate one message; raises :class:`Rejected` with the reason."""
-    return validate(parse_json(text), voc, expect)
+    """Parse and validate one message (of ``expect``, when given); :class:`Rejected` with the reason."""
+    if not isinstance(text, str):
+        raise Rejected("not a string")
+    if len(text) > MAX_TEXT:
+        raise Rejected(f"message of {len(text)} characters is too long")
+    schema = expect
+    try:
+        if schema is None:
+            schema = _schema_of(parse_json(text), None)
+        return _message(voc.decoder(schema).decode(text), schema)
+    except RecursionError:  # in a run status's free JSON
+        raise Rejected("nested too deep") from None
+    except UnicodeEncodeError:  # a lone surrogate: the text is not Unicode a JSON reader can take
+        raise Rejected(NOT_UNICODE) from None
+    except msgspec.ValidationError as exc:  # the envelope of another schema or version: said so, else the type's
+        try:
+            reason = _envelope_reason(msgspec.json.decode(text), expect) or str(exc)
+        except (msgspec.DecodeError, RecursionError):
+            reason = str(exc)
+        raise Rejected(short(reason)) from None
+    except msgspec.DecodeError as exc:
+        raise Rejected(short(f"not JSON ({exc})")) from None
+
+
+def _schema_of(obj, expect) -> str:
+    reason = _envelope_reason(obj, expect)
+    if reason is not None:
+        raise Rejected(reason)
+    return obj["schema"]
 
 
 def validate(obj: Any, voc: Vocabulary, expect: str | None = None) -> Message:
-    if not isinstance(obj, dict):
-        raise Rejected(f"not a JSON object but {type(obj).__name__}")
-    schema = obj.get("schema")
-    if not isinstance(schema, str) or schema not in SCHEMAS:
-        raise Rejected(short(f"unknown schema {schema!r}"))
-    if expect is not None and schema != expect:
-        raise Rejected(f"schema {schema!r} on a topic that carries {expect!r}")
-    if obj.get("version") != VERSION:
-        raise Rejected(short(f"{schema} version {obj.get('version')!r} is not {VERSION}"))
-    run = COUNT(obj.get("run"), voc, "run")
-    tick = COUNT(obj.get("tick"), voc, "tick")
-    stamp = STAMP(obj.get("stamp"), voc, "stamp")
-    body = {k: v for k, v in obj.items() if k not in ENVELOPE and k != AUTH_KEY}
-    fields = _fields(body, SCHEMAS[schema], voc, "")
-    return Message(schema, run, tick, stamp, fields)
+    """A message given as Python data (a tool's, a test's), validated as ``decode`` does."""
+    schema = _schema_of(obj, expect)
+    try:
+        return _message(msgspec.convert(obj, voc.message(schema)), schema)
+    except msgspec.ValidationError as exc:
+        raise Rejected(short(str(exc))) from None
+    except UnicodeEncodeError:
+        raise Rejected(NOT_UNICODE) from None
