@@ -225,7 +225,7 @@ def test_package_xml_names_every_runtime_dependency_by_its_rosdep_key():
               "hypothesis": "python3-hypothesis",
               "ros-jazzy-rclpy": "rclpy", "ros-jazzy-common-interfaces": "std_msgs",
               "ros-jazzy-rmw-fastrtps-cpp": "rclpy"}
-    no_key = ("pgmpy", "qi", "rosbags", "mcap", "mcap-ros2-support", "foxglove-sdk")
+    no_key = ("pgmpy", "qi", "rosbags", "mcap", "mcap-ros2-support", "foxglove-sdk", "msgspec")
     project = tomllib.loads((ros2cli.REPO / "pyproject.toml").read_text())["project"]
     for req in project["dependencies"]:
         name = re.split(r"[=<>!~\[]", req)[0]

@@ -417,7 +417,7 @@ def run_node(factory: Callable[[], Node], args=None, config_errors: tuple = ()) 
     code = 0
     try:
         node = factory()
-        executor = make_executor(node.executor_kind)  # one executor per process
+        executor = make_executor(getattr(node, "executor_kind", EXECUTOR.default))  # one executor per process
         executor.add_node(node)
         while rclpy.ok():  # a finite timeout: the events executor spun without one never fires timers
             executor.spin_once(timeout_sec=SPIN_S)

@@ -329,7 +329,8 @@ class Vocabulary:
     def message(self, schema: str) -> type:
         """The Struct of a whole message of ``schema``: the envelope and the payload's fields."""
         env = {"schema": (lambda voc: Literal[schema], True), "version": (lambda voc: Literal[VERSION], True),
-               "run": (count, True), "tick": (count, True), "stamp": (num(0.0, 1e12), True)}
+               "run": (count, True), "tick": (count, True), "stamp": (num(0.0, 1e12), True),
+               AUTH_KEY: (lambda voc: Annotated[str, Meta(max_length=128)], False)}  # a reader that checks no signature
         return self.struct(schema, PAYLOADS[schema], env)
 
     def decoder(self, schema: str) -> msgspec.json.Decoder:
@@ -410,6 +411,7 @@ def _message(m, schema: str) -> Message:
     fields = msgspec.to_builtins(m)
     for k in ENVELOPE:
         del fields[k]
+    fields.pop(AUTH_KEY, None)
     return Message(schema, m.run, m.tick, m.stamp, fields)
 
 

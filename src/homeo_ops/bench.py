@@ -1,9 +1,11 @@
 """``homeo-launch bench``: the graph's seconds per tick against the floor of rclpy itself.
 
-The floor is a ring of processes that pass a message on with empty callbacks, with as
-many publish-receive hops per tick as the graph has: per tick the graph delivers
-observation -> intention, world -> drives, intention -> drives, outcome -> drives,
-drives -> decision and action -> simulation, six hops (six publishes, six receptions).
+The floor is a ring of six processes that pass a message on with empty callbacks: six publish-receive
+hops a tick, as many as the graph delivered before the outcome of tick k-1 rode in the world and
+observation of tick k (observation -> intention, world -> drives, intention -> drives, outcome -> drives,
+drives -> decision, action -> world). The graph now delivers five (``homeo_msgs_py.graph``), four of
+them on the critical path. The floor runs on the executor the graph runs on (``--executor``, rclpy's
+EventsExecutor by default) and on the other, so the ratio compares like with like.
 The graph runs as ``homeo-launch sim`` does by default: messages signed, checkpoints every 100
 ticks (in a temporary folder). Graph and floor run in the same invocation, alternating, each
 round printed, and the medians are reported. Comparisons in the same rounds, each pair in
@@ -22,6 +24,7 @@ import sys
 import time
 
 from homeo_msgs_py.graph import ORACLE
+from homeo_msgs_py.node_base import EXECUTOR
 
 from homeo_launch.launch import GraphOptions, run_graph, sim_options
 from . import profile
@@ -33,10 +36,10 @@ HOPS = 6  # publish-receive hops per tick in the graph (see above)
 CRITICAL_HOPS = 4
 
 
-def floor_s_per_tick(iterations: int, hops: int = HOPS, bound_s: float = 120.0) -> float:
+def floor_s_per_tick(iterations: int, hops: int = HOPS, executor: str = EXECUTOR.default, bound_s: float = 120.0) -> float:
     # each process declares node name homeo_floor: renamed so that its parameters file applies
     specs = [NodeSpec(f"homeo_floor_{i}", "homeo_ops.floor_chain",
-                      {"index": i, "hops": hops, "iterations": iterations},
+                      {"index": i, "hops": hops, "iterations": iterations, EXECUTOR.name: executor},
                       args=["--ros-args", "-r", f"__node:=homeo_floor_{i}"]) for i in range(hops)]
     graph = Graph(specs, graph_env(), auth=False)  # the floor: raw rclpy, nothing signed
     try:
@@ -89,6 +92,7 @@ def timed_run(o: GraphOptions, sinks=(), sampler=None) -> dict:
         (t0, c0), (t1, c1) = marks
         both = [n for n in c0 if c0[n] is not None and c1.get(n) is not None]
         out["cpu_s_per_tick"] = sum(c1[n] - c0[n] for n in both) / (t1 - t0)
+        out["node_cpu_s_per_tick"] = {n: (c1[n] - c0[n]) / (t1 - t0) for n in both if n != "launcher"}
         if "launcher" in both:
             out["launcher_cpu_s_per_tick"] = (c1["launcher"] - c0["launcher"]) / (t1 - t0)
     return out
@@ -178,12 +182,14 @@ def cmd_bench(args) -> int:
             return 2
     med = statistics.median
     variants = [n for n, (flag, _) in VARIANTS.items() if getattr(args, flag, False)]
-    s: dict = {n: [] for n in ["graph", *VARIANTS, "floor", "critical", "recorded"]}
+    s: dict = {n: [] for n in ["graph", *VARIANTS, "floor", "floor_other", "critical", "recorded"]}
     plain_runs, rec_runs, rss, missed = [], [], [], 0
+    other = next(k for k in EXECUTOR.choices if k != args.executor)
     with tempfile.TemporaryDirectory(prefix="homeo-bench-") as tmp:
         for r in range(args.rounds):
             for name in pair_order(r, variants):
-                run = timed_run(bench_options(args.iterations, tmp, **VARIANTS.get(name, ("", {}))[1]))
+                run = timed_run(bench_options(args.iterations, tmp, executor=args.executor,
+                                              **VARIANTS.get(name, ("", {}))[1]))
                 s[name].append(run["s_per_tick"])
                 if name == "graph":
                     plain_runs.append(run)
@@ -192,9 +198,10 @@ def cmd_bench(args) -> int:
             if args.record:
                 rec_runs.append(recorded_run(args.iterations, args.record_from))
                 s["recorded"].append(rec_runs[-1]["s_per_tick"])
-            s["floor"].append(floor_s_per_tick(args.iterations, HOPS))
+            s["floor"].append(floor_s_per_tick(args.iterations, HOPS, args.executor))
+            s["floor_other"].append(floor_s_per_tick(args.iterations, HOPS, other))
             if args.critical_path:
-                s["critical"].append(floor_s_per_tick(args.iterations, CRITICAL_HOPS))
+                s["critical"].append(floor_s_per_tick(args.iterations, CRITICAL_HOPS, args.executor))
             if not args.json:
                 print(round_line(r, s), file=sys.stderr)
         try:
@@ -203,7 +210,10 @@ def cmd_bench(args) -> int:
             print(f"homeo-launch bench: {exc}", file=sys.stderr)
             return 1
     g, f = med(s["graph"]), med(s["floor"])
+    cpu = {n: med(r["node_cpu_s_per_tick"][n] for r in plain_runs) for n in plain_runs[0].get("node_cpu_s_per_tick", {})}
     out = {"graph_s_per_tick": g, "floor_s_per_tick": f, "ratio": g / f, "rss_mb": max(rss), "hops": HOPS,
+           "executor": args.executor, "other_executor": other, "floor_other_s_per_tick": med(s["floor_other"]),
+           "node_cpu_s_per_tick": cpu,
            "rounds": args.rounds, "iterations": args.iterations, "graph_s_per_tick_per_round": s["graph"],
            "floor_s_per_tick_per_round": s["floor"], "ratio_per_round": ratios(s["graph"], s["floor"]),
            "checkpoint_every": 100}
@@ -249,8 +259,12 @@ def print_summary(out: dict, missed: int, prof) -> None:
     per = lambda key, fmt=".2f": ", ".join(f"{x:{fmt}}" for x in out[key])  # noqa: E731
     print(f"graph (bayes), lockstep    : {g * 1e3:7.3f} ms/tick (median of {n} x {out['iterations']} ticks, {missed} "
           f"missed; signed, checkpoints every {out['checkpoint_every']} ticks)")
-    print(f"floor, {HOPS} rclpy hops       : {f * 1e3:7.3f} ms/tick")
+    print(f"floor, {HOPS} rclpy hops       : {f * 1e3:7.3f} ms/tick on the graph's executor ({out['executor']}); "
+          f"{out['floor_other_s_per_tick'] * 1e3:.3f} ms/tick on {out['other_executor']}")
     print(f"ratio graph / floor        : {out['ratio']:7.2f}  (target <= {TARGET_RATIO}; per round: {per('ratio_per_round')})")
+    if out["node_cpu_s_per_tick"]:
+        print("each node's CPU a tick     : " + ", ".join(f"{n} {c * 1e3:.3f} ms" for n, c in
+                                                          sorted(out["node_cpu_s_per_tick"].items())))
     if "critical_path_ratio" in out:
         print(f"critical path only, {CRITICAL_HOPS} hops: {out['critical_path_floor_s_per_tick'] * 1e3:7.3f} ms/tick, "
               f"ratio {out['critical_path_ratio']:.2f}")
@@ -283,7 +297,7 @@ def profiled(args, tmp: str) -> dict:
     n = max(args.iterations, PROFILE_TICKS)
     sampler = profile.Sampler()
     try:
-        run = timed_run(bench_options(n, tmp), sampler=sampler)
+        run = timed_run(bench_options(n, tmp, executor=args.executor), sampler=sampler)
     finally:
         sampler.close()
     ms_tick = run["s_per_tick"] * 1e3
@@ -364,4 +378,7 @@ def add_parser(sub) -> None:
                    help="also sample one run with py-spy and print where each node's time goes in a tick (decode, "
                         f"HMAC check, join, core step, encode, sign, publish, checkpoint, waiting...); needs "
                         f"{profile.INSTALL}")
+    from homeo_msgs_py.params import add_flag
+
+    add_flag(b, EXECUTOR, default=EXECUTOR.default)
     b.add_argument("--json", action="store_true")

@@ -3,7 +3,8 @@
 Process i reads /homeo_floor/hop{i-1} and writes /homeo_floor/hop{i}; process 0 starts each
 round and times ``iterations`` rounds of ``hops`` publish-receive hops, as many hops per
 round as the graph's tick has on its critical path. It prints ``{"s_per_tick": x}``.
-Parameters: index, hops, iterations.
+Parameters: index, hops, iterations, executor (the graph's: rclpy's EventsExecutor or its
+SingleThreadedExecutor, so the floor runs on the executor the graph runs on).
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ import time
 from rclpy.node import Node
 from std_msgs.msg import String
 
-from homeo_msgs_py.node_base import run_node
+from homeo_msgs_py.node_base import EXECUTOR, run_node
 from homeo_msgs_py.qos import EVENT, quiet_pub_events, quiet_sub_events
 
 PAYLOAD = "x" * 300  # about the size of a homeo message
@@ -27,6 +28,7 @@ class FloorNode(Node):
         self.index = self.declare_parameter("index", 0).value
         self.hops = self.declare_parameter("hops", 4).value
         self.iterations = self.declare_parameter("iterations", 1000).value
+        self.executor_kind = self.declare_parameter(EXECUTOR.name, EXECUTOR.default).value  # run_node's executor
         prev = (self.index - 1) % self.hops
         # the same endpoint settings as the graph's nodes, so the comparison is like for like
         self.pub = self.create_publisher(String, f"/homeo_floor/hop{self.index}", EVENT,
@@ -53,15 +55,13 @@ class FloorNode(Node):
             self.n += 1
         if self.n >= self.iterations:
             print(json.dumps({"s_per_tick": (time.perf_counter() - self.t0) / self.iterations}), flush=True)
-            raise SystemExit(0)
+            self.context.try_shutdown()  # run_node's spin ends (an exception out of a callback would not, on every executor)
+            return
         self.pub.publish(self.msg)
 
 
 def main(args=None) -> int:
-    try:
-        return run_node(FloorNode, args)
-    except SystemExit as exc:
-        return int(exc.code or 0)
+    return run_node(FloorNode, args)
 
 
 if __name__ == "__main__":
