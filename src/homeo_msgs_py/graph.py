@@ -145,6 +145,11 @@ def readers(topic: str, learning: bool) -> int:
     return endpoints(learning).get(topic, (0, 0))[1]
 
 
+def max_readers(topic: str) -> int:
+    """The most nodes of the graph reading ``topic`` in either mode (0: none reads it)."""
+    return max(readers(topic, learning) for learning in (False, True))
+
+
 def min_readers(topic: str) -> int:
     """The fewest nodes reading ``topic`` in either mode: a robot node, which does not know whether
     the intention node learns, waits for that many readers (and the launcher's tap) before it publishes."""

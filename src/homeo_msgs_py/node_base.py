@@ -21,7 +21,7 @@ from . import data_dir
 from .auth import AuthError, load_signer
 from .cli_args import die_with_parent
 from .diagnostics import RejectLog
-from .graph import DIAGNOSTICS, LAUNCHER, NODES, RECORDER, SIGNED, TOPICS, min_readers, own_endpoints
+from .graph import DIAGNOSTICS, EVENT, LAUNCHER, NODES, RECORDER, SIGNED, TOPICS, max_readers, min_readers, own_endpoints
 from .params import ParamSpec
 from .qos import pub_qos, quiet_pub_events, quiet_sub_events, sub_qos
 from .schemas import Message, Rejected, Vocabulary, decode, encode, one_line
@@ -39,9 +39,12 @@ class GatedPublisher:
     an event that must not be lost before its reader matched). Messages wait in order; after
     ``bound_s`` without a match they go out anyway, with a warning."""
 
-    def __init__(self, node: "HomeoNode", key: str, min_subs: int = 1, bound_s: float = 10.0):
+    def __init__(self, node: "HomeoNode", key: str, min_subs: int = 1, bound_s: float = 10.0, lazy: bool = False):
         self.node = node
         self.key = key
+        # an event no node of the graph reads (homeo/outcome, which rides in the next tick's messages): sent
+        # only while someone listens (a person, a recorder's tap); kept in the spool when recording at the writers
+        self.lazy = lazy
         self.topic = TOPICS[key].name
         self.schema = TOPICS[key].schema
         self.pub = node.create_publisher(String, self.topic, pub_qos(key), event_callbacks=quiet_pub_events())
@@ -66,9 +69,12 @@ class GatedPublisher:
             self._since = time.monotonic()
         if self._timer is None:
             self._timer = self.node.create_timer(0.005, self._flush)
+        else:
+            self._timer.reset()
 
     def _send(self, text: str) -> None:
-        self.pub.publish(String(data=text))
+        if not self.lazy or self.pub.get_subscription_count():
+            self.pub.publish(String(data=text))
         self.node.spooled(self.pub.topic_name, text)
 
     def _flush(self) -> None:
@@ -85,9 +91,7 @@ class GatedPublisher:
         for text in self._queue:
             self._send(text)
         self._queue.clear()
-        self._timer.cancel()
-        self.node.destroy_timer(self._timer)
-        self._timer = None
+        self._timer.cancel()  # kept for the next wait: no entity destroyed in its own callback (events executor)
 
 
 class HomeoNode(Node):
@@ -202,8 +206,9 @@ class HomeoNode(Node):
 
     # -- topics ---------------------------------------------------------------------
     def publisher(self, key: str, min_subs: int = 0) -> GatedPublisher:
-        """A writer of topic ``key`` (of ``graph.TOPICS``)."""
-        return GatedPublisher(self, key, min_subs)
+        """A writer of topic ``key`` (of ``graph.TOPICS``); an event no node of the graph reads goes out
+        only while someone listens."""
+        return GatedPublisher(self, key, min_subs, lazy=TOPICS[key].kind == EVENT and not max_readers(key))
 
     def robot_publisher(self, key: str) -> GatedPublisher:
         """A robot node's writer of ``key``: its messages wait until the graph's readers and the
@@ -413,14 +418,13 @@ def run_node(factory: Callable[[], Node], args=None, config_errors: tuple = ()) 
         print(f"error: {refusal}", file=sys.stderr)
         return 2
     rclpy.init(args=args)  # installs SIGINT/SIGTERM handlers that shut the context down
-    node = None
+    node = executor = None
     code = 0
     try:
         node = factory()
         executor = make_executor(getattr(node, "executor_kind", EXECUTOR.default))  # one executor per process
         executor.add_node(node)
-        while rclpy.ok():  # a finite timeout: the events executor spun without one never fires timers
-            executor.spin_once(timeout_sec=SPIN_S)
+        spin_forever(executor)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except (NodeConfigError, ParameterException, *config_errors) as exc:  # bad start-up configuration
@@ -431,7 +435,23 @@ def run_node(factory: Callable[[], Node], args=None, config_errors: tuple = ()) 
         # reaches the node too; then SIGTERM) must not cut the final checkpoint short with a traceback
         for sig in (signal.SIGINT, signal.SIGTERM):
             signal.signal(sig, signal.SIG_IGN)
+        if executor is not None:
+            executor.shutdown()  # before the node's entities go: the events executor must not hold them then
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()
     return code
+
+
+def spin_forever(executor) -> None:
+    """Spin until the context shuts down (Ctrl-C, SIGTERM, ``ros2 launch``'s stop). A finite timeout: the
+    events executor spun without one busy-loops and never fires timers. Once the context is shutting down,
+    the events executor may fail to hand a callback its argument ("Unable to convert call argument"): the
+    stop, not an error."""
+    while rclpy.ok():
+        try:
+            executor.spin_once(timeout_sec=SPIN_S)
+        except RuntimeError:
+            if rclpy.ok():
+                raise
+            return
