@@ -14,7 +14,7 @@ from typing import Literal
 
 import msgspec
 
-from .schemas import NOT_UNICODE, VERSION, Rejected, Vocabulary, anything, short
+from .schemas import ANY, NOT_UNICODE, VERSION, Rejected, Vocabulary, const, short
 
 SCHEMA = "homeo/human_input"
 MAX_TEXT = 4096  # a person's message is a line
@@ -22,8 +22,8 @@ NONE_NAMES = (None, "none")
 PRAISE_SCOLD = {"praise": 1, "scold": -1}
 # the envelope a person may leave out: if there, it is this schema's; its run, tick and stamp are not
 # checked (a person does not count ticks: an input answers the tick that is waiting)
-ENVELOPE = {"schema": (lambda voc: Literal[SCHEMA], False), "version": (lambda voc: Literal[VERSION], False),
-            **{k: (anything, False) for k in ("run", "tick", "stamp")}}
+ENVELOPE = {"schema": (const(Literal[SCHEMA]), False), "version": (const(Literal[VERSION]), False),
+            **{k: (ANY, False) for k in ("run", "tick", "stamp")}}
 
 
 @dataclass(frozen=True)

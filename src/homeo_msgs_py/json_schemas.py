@@ -10,7 +10,7 @@ from __future__ import annotations
 import msgspec
 
 from . import human_input
-from .schemas import PAYLOADS, Vocabulary
+from .schemas import AUTH_KEY, PAYLOADS, Vocabulary
 
 
 def _inline(node, defs: dict):
@@ -31,6 +31,7 @@ def json_schema(name: str, voc: Vocabulary) -> dict:
     raw = msgspec.json.schema(t)
     out = _inline(raw, raw.get("$defs", {}))
     out.pop("$defs", None)
+    out["properties"].pop(AUTH_KEY, None)
     return {"$schema": "https://json-schema.org/draft/2020-12/schema", "title": name, **out}
 
 

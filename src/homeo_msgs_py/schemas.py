@@ -64,33 +64,20 @@ class Message:
 Type = Callable[["Vocabulary"], Any]
 
 
+def const(t) -> Type:
+    return lambda voc: t
+
+
 def num(lo: float, hi: float) -> Type:
-    bounds = {k: x for k, x in (("ge", lo), ("le", hi)) if math.isfinite(x)}
-    return lambda voc: Annotated[float, Meta(**bounds)]
+    return const(Annotated[float, Meta(**{k: x for k, x in (("ge", lo), ("le", hi)) if math.isfinite(x)})])
 
 
-def count(voc):
-    return Annotated[int, Meta(ge=0, le=MAX_INT)]
-
-
-def boolean(voc):
-    return bool
-
-
-def text(voc):
-    return Annotated[str, Meta(max_length=MAX_STR)]
-
-
-def symbol(voc):  # a cue: a short symbol or null
-    return Union[Annotated[str, Meta(min_length=1, max_length=64)], None]
-
-
-def feedback(voc):
-    return Literal[-1, 0, 1]
-
-
-def anything(voc):  # bounded by ``_tree``
-    return Any
+COUNT = const(Annotated[int, Meta(ge=0, le=MAX_INT)])
+BOOL, FEEDBACK, ANY = const(bool), const(Literal[-1, 0, 1]), const(Any)  # ANY: bounded by ``_tree``
+TEXT = const(Annotated[str, Meta(max_length=MAX_STR)])
+SYMBOL = const(Union[Annotated[str, Meta(min_length=1, max_length=64)], None])  # a cue: a short symbol or null
+# body drives by name, plus raw readings (battery_percent, temperature_status, ...): numbers
+BODY = const(dict[Annotated[str, Meta(max_length=64)], Annotated[float, Meta(ge=-1e9, le=1e9)]])
 
 
 def name(kind: str, nullable: bool = False) -> Type:
@@ -102,16 +89,13 @@ def name(kind: str, nullable: bool = False) -> Type:
     return of
 
 
-def drives(complete: bool) -> Type:
-    """Drive values in [0, 100] by drive name: every drive (``complete``) or some."""
-    def of(voc):
-        if complete:
-            return voc.struct("drives", {d: (num(0.0, 100.0), True) for d in voc.names("drives")})
-        return dict[name("drives")(voc), Annotated[float, Meta(ge=0.0, le=100.0)]]
-    return of
+def every(kind: str, value: Type, title: str) -> Type:
+    """A value for every name of ``kind`` (all drives, all motivations): an object with each as a field."""
+    return lambda voc: voc.struct(title, {n: (value, True) for n in voc.names(kind)})
 
 
 def by_name(kind: str, value: Type) -> Type:
+    """Values by name of ``kind``, some or all."""
     return lambda voc: dict[name(kind)(voc), value(voc)]
 
 
@@ -122,51 +106,46 @@ def obj(spec: dict, title: str) -> Type:
 
 def objects(voc):
     """``{"charger": {"status": "idle"}, ...}``: every scenario object with every variable."""
-    return voc.struct("objects", {o: (obj({v: ((lambda vals: lambda voc: Literal[tuple(vals)])(vals), True)
-                                           for v, vals in vars_.items()}, f"object {o}"), True)
-                                  for o, vars_ in voc.object_vars.items()})
+    return voc.struct("objects", {o: (obj({v: (const(Literal[tuple(vals)]), True) for v, vals in vars_.items()},
+                                          f"object {o}"), True) for o, vars_ in voc.object_vars.items()})
 
 
-def body(voc):
-    """Body drives by name, plus raw readings (battery_percent, temperature_status, ...): numbers."""
-    return dict[Annotated[str, Meta(max_length=64)], Annotated[float, Meta(ge=-1e9, le=1e9)]]
-
-
+DRIVES = every("drives", num(0.0, 100.0), "drives")
 HUMAN = {"presence": (name("presences"), True), "relation": (name("relations"), True)}
 WORLD_STATE = {"robot": (obj({"location": (name("locations"), True)}, "robot"), True),
                "objects": (objects, True), "human": (obj(HUMAN, "human"), True)}
 OUTCOME = {
     "action": (name("actions", nullable=True), True),
-    "feedback": (feedback, True),
+    "feedback": (FEEDBACK, True),
     "proposal": (name("actions", nullable=True), True),
     "clarified_intention": (name("intentions", nullable=True), True),
-    "body": (body, False),  # body right after the action
+    "body": (BODY, False),  # body right after the action
     # ground truth of the simulated human, for the metrics only (robot nodes never read it)
-    "truth": (obj({"intention": (name("intentions"), True), "expressed": (boolean, True),
-                   "satisfied": (boolean, True)}, "truth"), False),
+    "truth": (obj({"intention": (name("intentions"), True), "expressed": (BOOL, True),
+                   "satisfied": (BOOL, True)}, "truth"), False),
 }
 
 
 def _param(spec) -> Type:
     """A learning parameter's value as its declaration (``params.ParamSpec``) takes it."""
     if spec.kind is bool:
-        return boolean
+        return BOOL
     return num(-math.inf if spec.lo is None else spec.lo, math.inf if spec.hi is None else spec.hi)
 
 
 PAYLOADS: dict[str, dict[str, tuple[Type, bool]]] = {
     # simulation or robot -> intention, drives: what the world looks like at the start of a tick
     "homeo/world": dict(WORLD_STATE, **{
-        "body": (body, True),
-        "final": (boolean, False),  # the run ends with this tick: learn, do not act
+        "body": (BODY, True),
+        "final": (BOOL, False),  # the run ends with this tick: learn, do not act
         "outcome": (obj(OUTCOME, "outcome"), False),  # the outcome of tick k-1 (graph.Topic.carries; none at 0)
     }),
     # simulation or robot -> intention: what the robot sees of the human this tick
     "homeo/observation": {
         "intention": (name("intentions", nullable=True), False),  # oracle mode: observed directly
-        "gesture": (symbol, False),
-        "movement": (symbol, False),
-        "keyword": (symbol, False),
+        "gesture": (SYMBOL, False),
+        "movement": (SYMBOL, False),
+        "keyword": (SYMBOL, False),
         "outcome": (obj(OUTCOME, "outcome"), False),  # the outcome of tick k-1: the intention it revealed
     },
     # intention -> drives: the recognised intention and its posterior (Eq 2.10)
@@ -177,17 +156,17 @@ PAYLOADS: dict[str, dict[str, tuple[Type, bool]]] = {
     },
     # drives -> decision: drives, stimuli, intensities (Eq 3.2), dominant motivation (Eq 3.3)
     "homeo/drives": {
-        "drives": (drives(complete=True), True),
-        "stimuli": (obj({m: (num(-1e9, 1e9), True) for m in ()}, "stimuli"), True),  # replaced per vocabulary
-        "intensities": (obj({}, "intensities"), True),
+        "drives": (DRIVES, True),
+        "stimuli": (every("motivations", num(-1e9, 1e9), "stimuli"), True),
+        "intensities": (every("motivations", num(-1e9, 1e9), "intensities"), True),
         "m_dom": (name("internal_states"), True),
         "intention": (name("intentions"), True),  # the one the stimuli were computed with
         "world": (obj(WORLD_STATE, "perceived world"), True),  # the world these drives were perceived in
-        "after_action": (drives(complete=True), False),  # drives before the time step
+        "after_action": (DRIVES, False),  # drives before the time step
         # what tick k-1's action did, as these drives took it in: the decision learns from it
-        "outcome": (obj({"action": (name("actions", nullable=True), True), "feedback": (feedback, True),
+        "outcome": (obj({"action": (name("actions", nullable=True), True), "feedback": (FEEDBACK, True),
                          "proposal": (name("actions", nullable=True), True)}, "learned outcome"), False),
-        "final": (boolean, False),
+        "final": (BOOL, False),
     },
     # decision -> simulation or robot: the chosen action (null = none) and the drives it was chosen with
     "homeo/action": {
@@ -196,10 +175,10 @@ PAYLOADS: dict[str, dict[str, tuple[Type, bool]]] = {
         "tau": (num(0.0, 1e6), False),
         # the learning parameters in force, as declared (homeo_msgs_py.learning)
         "params": (obj({spec.name: (_param(spec), True) for spec in LEARNING}, "params"), False),
-        "drives": (drives(complete=True), False),  # the drives the choice was made with
+        "drives": (DRIVES, False),  # the drives the choice was made with
         "intention": (name("intentions"), False),  # the recognised intention it was made for
-        "after_action": (drives(complete=True), False),
-        "final": (boolean, False),  # the run ended: no action, only the last drives
+        "after_action": (DRIVES, False),
+        "final": (BOOL, False),  # the run ended: no action, only the last drives
     },
     # simulation or robot -> everyone: what the action did and what the human said
     "homeo/outcome": OUTCOME,
@@ -211,31 +190,27 @@ PAYLOADS: dict[str, dict[str, tuple[Type, bool]]] = {
     },
     # world -> the devices around the robot: a command its config maps an action to (play, switch on)
     "homeo/device": {
-        "device": (text, True),
-        "command": (text, True),
+        "device": (TEXT, True),
+        "command": (TEXT, True),
         "action": (name("actions", nullable=True), True),  # the action being performed
     },
     # world -> launcher: progress and, at the end, the run's metrics
     "homeo/run_status": {
-        "iterations": (count, True),
-        "done": (boolean, True),
-        "missed": (count, True),
-        "state": (text, True),
-        "metrics": (anything, False),
-        "extra": (anything, False),
+        "iterations": (COUNT, True),
+        "done": (BOOL, True),
+        "missed": (COUNT, True),
+        "state": (TEXT, True),
+        "metrics": (ANY, False),
+        "extra": (ANY, False),
     },
     # a person -> simulation (``--human person``): typed by hand, so the envelope may be left out
     # (``human_input.decode_human_input``)
     "homeo/human_input": {
         "intention": (name("intentions", nullable=True), False),  # null or "none": no wish
-        "feedback": (lambda voc: Union[Literal["praise", "scold", -1, 0, 1], None], False),
+        "feedback": (const(Union[Literal["praise", "scold", -1, 0, 1], None]), False),
         "proposal": (name("actions", nullable=True), False),
     },
 }
-# the motivations' stimuli and intensities: one number per motivation, every one
-for _k in ("stimuli", "intensities"):
-    PAYLOADS["homeo/drives"][_k] = ((lambda k: lambda voc: voc.struct(
-        k, {m: (num(-1e9, 1e9), True) for m in voc.names("motivations")}))(_k), True)
 SCHEMAS = PAYLOADS  # the payloads' field names, by schema (homeo-topic, the docs)
 ABSENT = "absent"  # the one value presence and relation share: each is absent iff the other is
 
@@ -328,9 +303,9 @@ class Vocabulary:
 
     def message(self, schema: str) -> type:
         """The Struct of a whole message of ``schema``: the envelope and the payload's fields."""
-        env = {"schema": (lambda voc: Literal[schema], True), "version": (lambda voc: Literal[VERSION], True),
-               "run": (count, True), "tick": (count, True), "stamp": (num(0.0, 1e12), True),
-               AUTH_KEY: (lambda voc: Annotated[str, Meta(max_length=128)], False)}  # a reader that checks no signature
+        env = {"schema": (const(Literal[schema]), True), "version": (const(Literal[VERSION]), True),
+               "run": (COUNT, True), "tick": (COUNT, True), "stamp": (num(0.0, 1e12), True),
+               AUTH_KEY: (const(Annotated[str, Meta(max_length=128)]), False)}  # a reader that checks no signature
         return self.struct(schema, PAYLOADS[schema], env)
 
     def decoder(self, schema: str) -> msgspec.json.Decoder:
