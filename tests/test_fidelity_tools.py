@@ -93,7 +93,7 @@ def test_the_seeds_it_validates_on_must_be_apart_from_the_search(tmp_path):
     (["confirm", "--change", "initial_q"], "not KEY=JSON"),
     (["confirm", "--change", "no_such=1"], "not a searched open choice"),
     (["confirm", "--change", "ongoing_effects=\"sometimes\""], "ongoing_effects"),
-    (["search", "--trials", "0"], "below the minimum"),
+    (["search", "--trials", "0"], "0 is outside [1, inf]"),
     (["validate", "--from", "/no/such/file.jsonl"], "No such file"),
     (["nothing"], "invalid choice"),
 ])

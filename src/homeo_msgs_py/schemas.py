@@ -346,9 +346,10 @@ def finite(obj):
 
 
 def short(text: str, limit: int = MAX_REASON) -> str:
-    """A reason cut to ``limit`` characters, printable: what a sender put in it cannot flood
-    /diagnostics or the log, nor break their encoding (lone surrogates become escapes)."""
-    text = text.encode("utf-8", "backslashreplace").decode("utf-8")
+    """A reason on one line, cut to ``limit`` characters, printable: what a sender put in it (a key that
+    msgspec quotes) cannot flood /diagnostics or the log, nor break their encoding (lone surrogates and
+    line breaks become escapes)."""
+    text = one_line(text).encode("utf-8", "backslashreplace").decode("utf-8")
     return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
