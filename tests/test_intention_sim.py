@@ -136,3 +136,24 @@ def test_issue_4_acceptance_bayes_against_oracle():
     assert last >= 0.90
     assert last >= first + 0.20
     assert abs(bayes["metrics"]["HSR"]["mean"] - oracle["metrics"]["HSR"]["mean"]) <= 0.05
+
+
+def test_the_intention_bench_times_the_run_it_would_have_run():
+    """``homeo-sim bench --intention bayes``: its timing wrapper leaves the recogniser's learning as it is (the
+    same EM runs as a plain bayes run of as many ticks), and its figures are the ones it prints."""
+    from homeo_msgs_py.graph import BAYES
+    from homeo_sim.intention_bench import bench_intention, format_bench
+
+    r = bench_intention(300, repeats=1)
+    sim = Simulation(load_scenario(), RunConfig(iterations=300, intention=BAYES))
+    sim.run(300)
+    assert r["em_runs"] == sim.recognition.model.em_runs > 0
+    assert r["em_iterations_per_run"] == sim.recognition.model.em_iterations / sim.recognition.model.em_runs
+    assert r["bayes_over_oracle_time"] == r["oracle_iterations_per_s"] / r["bayes_iterations_per_s"]
+    assert all(r[k] > 0 for k in ("recognise_us", "recognise_in_loop_us", "learn_per_tick_us", "em_run_us",
+                                  "pgmpy_query_us"))
+    text = format_bench(r)
+    assert f"({r['em_runs']} EM runs in 300 ticks" in text and f"{r['bayes_over_oracle_time']:.2f}x" in text
+    p = _cli("bench", "--intention", "bayes", "--iterations", "100", "--json")
+    assert p.returncode == 0, p.stderr
+    assert json.loads(p.stdout)["iterations"] == 100
