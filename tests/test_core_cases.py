@@ -1,0 +1,187 @@
+"""Small cases of the core computed by hand, written for the mutants ``make mutation`` found alive
+(tools/mutation.py): each assertion fails under one of them (a boundary moved, a term dropped, a check skipped)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from homeo_sim.metrics import (AccuracyEnds, MetricRecorder, accuracy_curve, accuracy_ends, cumulative_series,
+                               summarize)
+
+# -- metrics (Section 4.1) ---------------------------------------------------------------------------
+# three ticks, two drives with thresholds 0 and 50
+DRIVES = np.array([[10.0, 60.0], [20.0, 95.0], [0.0, 40.0]])
+EXPRESSED = np.array([True, False, True])
+SATISFIED = np.array([True, False, False])
+NAMES, THR = ["A", "B"], [0.0, 50.0]
+
+
+def test_cumulative_series_by_hand():
+    s = cumulative_series(DRIVES, EXPRESSED, SATISFIED, NAMES, THR)
+    # Eq 4.2 after 1, 2, 3 ticks: A 10, 15, 10; B 60, 77.5, 65; all their mean (Eq 4.3)
+    assert s["CDA"]["A"].tolist() == [10.0, 15.0, 10.0] and s["CDA"]["B"].tolist() == [60.0, 77.5, 65.0]
+    assert s["CDA"]["all"].tolist() == [35.0, 46.25, 37.5]
+    # Eq 4.4: excess over the threshold, A 10 20 0, B 10 45 0 (40 < 50 counts 0, not -10)
+    assert s["CEDA"]["A"].tolist() == [10.0, 15.0, 10.0]
+    assert s["CEDA"]["B"].tolist() == pytest.approx([10.0, 27.5, 55.0 / 3])
+    assert s["CEDA"]["all"].tolist() == pytest.approx([10.0, 21.25, (10.0 + 55.0 / 3) / 2])
+    # Eq 4.1 over the ticks with an intention: 1/1, 1/1, 1/2; Eq 4.6-4.7: tick 2 insecure (95 >= 90)
+    assert s["HSR"].tolist() == [1.0, 1.0, 0.5]
+    assert s["RSR"].tolist() == pytest.approx([1.0, 0.5, 2.0 / 3])
+    assert s["drives"]["B"].tolist() == [60.0, 95.0, 40.0]
+    assert s["expressed"] is EXPRESSED and s["satisfied"] is SATISFIED
+    later = cumulative_series(DRIVES, ~EXPRESSED, SATISFIED & False, NAMES, THR)  # no intention until tick 2
+    assert math.isnan(later["HSR"][0]) and later["HSR"][1:].tolist() == [0.0, 0.0]
+
+
+def _flat(d: dict) -> dict:
+    return {f"{k}.{j}": w for k, v in d.items() for j, w in (v.items() if isinstance(v, dict) else [("", v)])}
+
+
+def test_summary_by_hand_and_the_recorder_agrees():
+    want = {"HSR": 0.5, "RSR": 2.0 / 3, "CDA": {"A": 10.0, "B": 65.0, "all": 37.5},
+            "CEDA": {"A": 10.0, "B": 55.0 / 3, "all": (10.0 + 55.0 / 3) / 2}, "intentions": 2}
+    assert _flat(summarize(DRIVES, EXPRESSED, SATISFIED, NAMES, THR)) == pytest.approx(_flat(want))
+    rec = MetricRecorder(NAMES, THR, keep=True)
+    for d, e, s in zip(DRIVES.tolist(), EXPRESSED, SATISFIED):
+        rec.record(d, e, s)
+    assert rec.n == 3 and _flat(rec.summary()) == pytest.approx(_flat(want))
+    d, e, s = rec.arrays()
+    assert d.tolist() == DRIVES.tolist() and e.tolist() == EXPRESSED.tolist() and s.tolist() == SATISFIED.tolist()
+    assert rec.series()["CDA"]["all"].tolist() == [35.0, 46.25, 37.5]
+
+
+def test_the_boundaries_of_secure_and_of_excess():
+    rec = MetricRecorder(NAMES, THR)
+    rec.record([90.0, 50.0], False, False)  # 90 is not secure (Eq 4.7: every drive < 90); 50 is no excess
+    rec.record([89.5, 49.0], True, True)
+    out = rec.summary()
+    assert out["RSR"] == 0.5 and out["CEDA"]["B"] == 0.0 and out["CEDA"]["A"] == pytest.approx(89.75)
+    assert out["HSR"] == 1.0 and out["intentions"] == 1
+    assert math.isnan(summarize(DRIVES[:1], np.array([False]), np.array([False]), NAMES, THR)["HSR"])
+    empty = MetricRecorder(NAMES, THR)
+    with pytest.raises(ValueError, match="no iterations recorded"):
+        empty.summary()
+    with pytest.raises(ValueError, match="no iterations recorded"):
+        summarize(DRIVES[:0], EXPRESSED[:0], SATISFIED[:0], NAMES, THR)
+    with pytest.raises(ValueError, match=r"keep=True"):
+        empty.arrays()
+
+
+GOOD = {"n": 3, "intentions": 2, "satisfied": 1, "secure": 2, "sum": [30.0, 195.0], "excess": [30.0, 55.0]}
+
+
+@pytest.mark.parametrize("bad,words", [
+    ("x", "not a metrics state"),
+    (dict(GOOD, n=-1), "integers >= 0"), (dict(GOOD, n=3.0), "integers >= 0"), (dict(GOOD, secure=True), "integers >= 0"),
+    (dict(GOOD, intentions=4), "inconsistent"), (dict(GOOD, satisfied=3), "inconsistent"), (dict(GOOD, secure=4), "inconsistent"),
+    (dict(GOOD, sum=[1.0]), "metric sum must be 2 finite"), (dict(GOOD, sum=[1.0, -1.0]), "metric sum"),
+    (dict(GOOD, sum=[1.0, float("nan")]), "metric sum"), (dict(GOOD, sum=[1.0, "2"]), "metric sum"),
+    (dict(GOOD, excess=None), "metric excess must be 2 finite"), (dict(GOOD, excess=[0.0, float("inf")]), "metric excess"),
+])
+def test_a_metrics_state_is_refused_whole(bad, words):
+    rec = MetricRecorder(NAMES, THR)
+    rec.record([1.0, 2.0], True, False)
+    before = rec.state()
+    with pytest.raises(ValueError, match=words):
+        rec.set_state(bad)
+    assert rec.state() == before  # nothing changed
+
+
+def test_a_metrics_state_goes_on_as_the_uninterrupted_run():
+    whole, first = MetricRecorder(NAMES, THR), MetricRecorder(NAMES, THR)
+    for d, e, s in zip(DRIVES.tolist()[:2], EXPRESSED, SATISFIED):
+        whole.record(d, e, s)
+        first.record(d, e, s)
+    st = first.state()
+    assert st == {"n": 2, "intentions": 1, "satisfied": 1, "secure": 1, "sum": [30.0, 155.0], "excess": [30.0, 55.0]}
+    later = MetricRecorder(NAMES, THR)
+    later.set_state(st)
+    for rec in (whole, later):
+        rec.record(DRIVES[2].tolist(), True, False)
+    assert later.state() == whole.state() == GOOD
+    assert later.summary() == whole.summary()
+    with pytest.raises(ValueError, match="keeps every tick"):
+        MetricRecorder(NAMES, THR, keep=True).set_state(GOOD)
+
+
+def test_accuracy_at_both_ends_and_per_window():
+    hits = [True, False, True, True, False]
+    assert accuracy_ends(hits, 2) == {"first_2": 0.5, "last_2": 0.5}
+    assert accuracy_ends(hits[:4], 2) == {"first_2": 0.5, "last_2": 1.0}
+    assert accuracy_ends(hits, 10) == {"first_10": 0.6, "last_10": 0.6}  # a shorter run: the whole of it
+    with pytest.raises(ValueError, match="no iterations"):
+        accuracy_ends([])
+    assert accuracy_curve(hits, 2) == [0.5, 1.0]  # the fifth tick's window of one is dropped
+    assert accuracy_curve(hits, 5) == [0.6] and accuracy_curve(hits, 6) == []
+    ends = AccuracyEnds(2)
+    with pytest.raises(ValueError, match="no iterations"):
+        ends.ends()
+    ends.append(True)
+    assert len(ends) == 1 and ends.ends() == {"first_2": 1.0, "last_2": 1.0}
+    for h in (False, False):
+        ends.append(h)
+    assert len(ends) == 2 and ends.ends() == {"first_2": 0.5, "last_2": 0.0}
+    assert ends.state() == {"window": 2, "first": "10", "last": "00"}
+    again = AccuracyEnds(2)
+    again.set_state(ends.state())
+    again.append(True)
+    assert again.state() == {"window": 2, "first": "10", "last": "01"} and again.ends() == {"first_2": 0.5, "last_2": 0.5}
+
+
+@pytest.mark.parametrize("bad,words", [
+    ([], "window 2"), ({"window": 3, "first": "", "last": ""}, "window 2"),
+    ({"window": 2, "first": 1, "last": "1"}, "strings of 0 and 1"), ({"window": 2, "first": "1", "last": "012"}, "at most 2"),
+    ({"window": 2, "first": "1", "last": "1x"}, "strings of 0 and 1"), ({"window": 2, "first": "11", "last": "1"}, "fewer last"),
+])
+def test_an_accuracy_state_is_refused_whole(bad, words):
+    ends = AccuracyEnds(2)
+    ends.append(True)
+    with pytest.raises(ValueError, match=words):
+        ends.set_state(bad)
+    assert ends.state() == {"window": 2, "first": "1", "last": "1"}
+
+
+# -- the decision core (Algorithm 1's parameters, Table 4.4's schedule) ---------------------------------
+def test_the_schedule_goes_on_from_the_tick_offset(thesis):
+    from homeo_decision.agent import DecisionCore
+
+    core = DecisionCore(thesis, 0)
+    first, later = core.schedule  # Table 4.4: alpha 0.3, tau 4 for the first 1000 iterations, then 0.1 and 2
+    assert (first.start, first.alpha, first.tau, later.start, later.alpha, later.tau) == (0, 0.3, 4.0, 1000, 0.1, 2.0)
+    assert core.phase(5) is first and core.phase(999) is first and core.phase(1000) is later
+    core.set_tick_offset(995)  # a robot that had learned 995 ticks: its tick 5 is the schedule's 1000
+    assert core.tick_offset == 995 and core.phase(4) is first and core.phase(5) is later
+    core.set_tick_offset(0)  # the phase cached for tick 5 was the later one: forgotten
+    assert core.tick_offset == 0 and core.phase(0) is first and core.phase(1) is first and core.phase(5) is first
+    with pytest.raises(ValueError, match="tick offset must be >= 0, got -1"):
+        core.set_tick_offset(-1)
+    assert core.tick_offset == 0
+
+
+def test_the_parameters_in_force_by_name(thesis):
+    from homeo_decision.agent import DecisionCore
+
+    core = DecisionCore(thesis, 0, dod=0.4, xi=2.0)
+    # the scenario's gamma 0.5 (Table 4.4) and the two switches on; dod and xi as given
+    assert list(core.params().items()) == [("dod", 0.4), ("xi", 2.0), ("gamma", 0.5), ("feedback", True),
+                                           ("pseudo_update", True)]
+
+
+def test_reset_forgets_the_table_and_starts_the_stream_again(thesis):
+    from homeo_decision.agent import DecisionCore
+    from homeo_decision.rng import UniformStream
+
+    core = DecisionCore(thesis, 3)
+    drawn = [core.rng.random() for _ in range(3)]
+    assert drawn[0] == UniformStream(3, "decision").random()  # the stream of the seed, named for its component
+    core.q.q[0][0][0] = 99.0
+    core.reset()
+    assert core.q.q[0][0][0] == thesis.open.initial_q and core.seed == 3
+    assert [core.rng.random() for _ in range(3)] == drawn
+    core.reset(7)
+    seven = UniformStream(7, "decision")
+    assert core.seed == 7 and [core.rng.random() for _ in range(3)] == [seven.random() for _ in range(3)]

@@ -1,0 +1,144 @@
+"""The core's mutation score, per module, with mutmut (a tool dependency: tools/requirements-mutation.lock).
+
+Each module of the core that holds an equation of the thesis or a metric is mutated on its own, in its
+own folder ``out/mutation/<module>/`` (mutmut's ``mutants/`` and its results stay there: a second run
+tests only what changed, an interrupted one goes on where it stopped), against the fast ROS-free tests
+below (mutmut runs, for each mutant, the tests that call the mutated function). A surviving mutant is
+either killed by a test that hand-computes the case or listed in EQUIVALENT with the reason no test can
+kill it; the score counts the listed ones apart.
+
+Usage: make mutation [MODULES="reward objectq"] [MUTATION_JOBS=1] [MUTATION_BUDGET=1800]
+       .venv/bin/python tools/mutation.py [--jobs N] [--budget SECONDS] [--survivors] [MODULE ...]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+OUT = ROOT / "out" / "mutation"
+
+MODULES = {  # module -> its source file
+    "reward": "src/homeo_decision/reward.py",
+    "objectq": "src/homeo_decision/objectq.py",
+    "motivation": "src/homeo_decision/motivation.py",
+    "drives": "src/homeo_decision/drives.py",
+    "agent": "src/homeo_decision/agent.py",
+    "metrics": "src/homeo_sim/metrics.py",
+    "intention_model": "src/homeo_intention/model.py",
+    "intention_em": "src/homeo_intention/em.py",
+    "world": "src/homeo_sim/world.py",
+    "body": "src/homeo_sim/body.py",
+    "human": "src/homeo_sim/human.py",
+}
+# fast and ROS-free: the core's tests (no node graph, no libqi)
+TESTS = ["test_reward.py", "test_objectq.py", "test_motivation.py", "test_metrics.py", "test_intention_core.py",
+         "test_sim_world_human.py", "test_baselines.py", "test_determinism.py", "test_energy_readings.py",
+         "test_fidelity.py", "test_scenario.py", "test_core_cases.py"]
+
+# mutant -> why no test can tell it from the original (it computes the same thing on every input)
+EQUIVALENT: dict[str, str] = {
+}
+
+
+def _mutmut_config(source: str) -> str:
+    tests = ", ".join(json.dumps(str(ROOT / "tests" / t)) for t in TESTS if (ROOT / "tests" / t).is_file())
+    return ("[tool.mutmut]\n"
+            'source_paths = ["src"]\n'
+            f"only_mutate = [{json.dumps(source)}]\n"
+            f"pytest_add_cli_args_test_selection = [{tests}]\n"
+            f'pytest_add_cli_args = ["-p", "no:xdist", "-p", "no:cacheprovider", "--rootdir", {json.dumps(str(ROOT))}]\n')
+
+
+def _fresh_copy(work: Path, source: str) -> None:
+    """mutmut copies src/ once and never again: the unmutated modules are copied anew on every run, so that
+    a module changed since (a test's helper, the scenario) is the one tested."""
+    for p in (work / "mutants" / "src").rglob("*"):
+        rel = p.relative_to(work / "mutants")
+        if p.is_file() and str(rel) != source and not p.name.endswith(".meta"):
+            p.unlink()
+
+
+def run_module(name: str, jobs: int, budget: float) -> dict:
+    source = MODULES[name]
+    work = OUT / name
+    work.mkdir(parents=True, exist_ok=True)
+    (work / "pyproject.toml").write_text(_mutmut_config(source))
+    if not (work / "src").exists():
+        (work / "src").symlink_to(ROOT / "src")
+    _fresh_copy(work, source)
+    mutmut = [str(Path(sys.executable).with_name("mutmut"))]
+    env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1")
+    t = time.monotonic()
+    try:
+        with open(work / "run.log", "w") as log:
+            subprocess.run(["nice", "-n", "10", *mutmut, "run", "--max-children", str(jobs)], cwd=work, env=env,
+                           stdout=log, stderr=subprocess.STDOUT, timeout=budget, check=False)
+    except subprocess.TimeoutExpired:
+        print(f"  {name}: stopped after its budget of {budget:.0f} s; the next run goes on from here", file=sys.stderr)
+    took = time.monotonic() - t
+    res = subprocess.run([*mutmut, "results", "--all", "true"], cwd=work, capture_output=True, text=True, check=False)
+    status = {}
+    for line in res.stdout.splitlines():
+        key, _, st = line.strip().rpartition(": ")
+        if key:
+            status[key] = st
+    return {"status": status, "seconds": took}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("modules", nargs="*", help=f"default: all ({', '.join(MODULES)})")
+    ap.add_argument("--jobs", type=int, default=int(os.environ.get("MUTATION_JOBS", "1")), help="mutmut's children")
+    ap.add_argument("--budget", type=float, default=1800.0, help="wall seconds per module (then it stops; rerun goes on)")
+    ap.add_argument("--survivors", action="store_true", help="list every surviving mutant (mutmut show NAME in its folder)")
+    a = ap.parse_args(argv)
+    unknown = [m for m in a.modules if m not in MODULES]
+    if unknown:
+        ap.error(f"unknown module {', '.join(unknown)} (known: {', '.join(MODULES)})")
+    if shutil.which("mutmut", path=str(Path(sys.executable).parent)) is None:
+        ap.error("mutmut is not installed in this venv: make mutation-setup")
+    if a.jobs < 1 or a.budget <= 0:
+        ap.error("--jobs and --budget must be positive")
+    total = {"killed": 0, "equivalent": 0, "survived": 0, "other": 0}
+    print(f"{'module':16} {'mutants':>7} {'killed':>6} {'equiv':>5} {'surv':>5} {'other':>5} {'score':>6} {'time':>6}")
+    for name in a.modules or MODULES:
+        r = run_module(name, a.jobs, a.budget)
+        c = {k: 0 for k in total}
+        survivors = []
+        for key, st in r["status"].items():
+            if st in ("killed", "timeout"):
+                c["killed"] += 1
+            elif key in EQUIVALENT:
+                c["equivalent"] += 1
+            elif st == "survived":
+                c["survived"] += 1
+                survivors.append(key)
+            else:  # not checked, no tests, suspicious: counted against the score
+                c["other"] += 1
+                survivors.append(f"{key} ({st})")
+        n = sum(c.values())
+        score = c["killed"] / (n - c["equivalent"]) if n > c["equivalent"] else float("nan")
+        print(f"{name:16} {n:7d} {c['killed']:6d} {c['equivalent']:5d} {c['survived']:5d} {c['other']:5d} "
+              f"{score:6.1%} {r['seconds']:5.0f}s", flush=True)
+        if a.survivors:
+            for s in survivors:
+                print(f"    {s}")
+        for k in total:
+            total[k] += c[k]
+    n = sum(total.values())
+    if n > total["equivalent"]:
+        print(f"{'core':16} {n:7d} {total['killed']:6d} {total['equivalent']:5d} {total['survived']:5d} "
+              f"{total['other']:5d} {total['killed'] / (n - total['equivalent']):6.1%}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
