@@ -185,3 +185,62 @@ def test_reset_forgets_the_table_and_starts_the_stream_again(thesis):
     core.reset(7)
     seven = UniformStream(7, "decision")
     assert core.seed == 7 and [core.rng.random() for _ in range(3)] == [seven.random() for _ in range(3)]
+
+
+# -- the simulated human's checkpoint (homeo_sim.human) -----------------------------------------------------
+def _human(thesis, seed=5, ticks=7):
+    from homeo_sim.human import SimHuman
+
+    h = SimHuman(thesis, seed)
+    for t in range(ticks):
+        h.advance(0)
+        h.respond(t % 5)
+        h.observe()
+    return h
+
+
+def test_a_human_state_goes_on_with_the_same_draws(thesis):
+    from homeo_sim.human import SimHuman
+
+    h = _human(thesis)
+    st = h.state()
+    assert set(st) == {"seed", "intention", "present", "satisfied", "rng", "obs_rng"} and st["seed"] == 5
+    other = SimHuman(thesis, 0)
+    other.set_state(st)
+    assert other.state() == st
+    for t in range(20):
+        for x in (h, other):
+            x.advance(0)
+        assert (h.intention, h.present) == (other.intention, other.present)
+        assert h.respond(t % 5) == other.respond(t % 5) and h.observe() == other.observe()
+    h.reset()  # the same seed, a fresh start (Algorithm 2 line 1: no intention)
+    assert (h.seed, h.intention, h.present, h.satisfied) == (5, 0, True, False)
+    assert h.state()["rng"] == SimHuman(thesis, 5).state()["rng"]
+    h.reset(9)
+    assert h.seed == 9 and h.state()["obs_rng"] == SimHuman(thesis, 9).state()["obs_rng"]
+
+
+@pytest.mark.parametrize("change,words", [
+    (None, "not a human state"),
+    ({"seed": -1}, "human seed must be an integer in 0..2\\^31-1"), ({"seed": 2**31}, "human seed"),
+    ({"seed": True}, "human seed"), ({"seed": 5.0}, "human seed"),
+    ({"intention": -1}, "human intention must be an index"), ({"intention": 7}, "human intention"),
+    ({"intention": False}, "human intention"),
+    ({"present": 1}, "present and satisfied must be true or false"), ({"satisfied": "no"}, "present and satisfied"),
+    ({"rng": None}, "human stream: not a random-stream state"), ({"rng": {"block": 0, "drawn": 1.0}}, "human stream"),
+    ({"obs_rng": {"block": "0", "drawn": 0}}, "observation stream: not a random-stream state"),
+])
+def test_a_human_state_is_refused_whole(thesis, change, words):
+    h = _human(thesis)
+    before = h.state()
+    with pytest.raises(ValueError, match=words):
+        h.set_state("x" if change is None else dict(before, **change))
+    assert h.state() == before
+
+
+def test_a_human_state_at_its_bounds_is_taken(thesis):
+    h = _human(thesis)
+    st = dict(h.state(), seed=2**31 - 1, intention=len(thesis.intention_names) - 1, present=False, satisfied=True)
+    st["rng"] = dict(st["rng"])  # a stream state is the seed's: it goes on under the new seed's generator
+    h.set_state(st)
+    assert (h.seed, h.intention, h.present, h.satisfied) == (2**31 - 1, 6, False, True)

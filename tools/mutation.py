@@ -25,31 +25,30 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "out" / "mutation"
 
-MODULES = {  # module -> its source file
-    "reward": "src/homeo_decision/reward.py",
-    "objectq": "src/homeo_decision/objectq.py",
-    "motivation": "src/homeo_decision/motivation.py",
-    "drives": "src/homeo_decision/drives.py",
-    "agent": "src/homeo_decision/agent.py",
-    "metrics": "src/homeo_sim/metrics.py",
-    "intention_model": "src/homeo_intention/model.py",
-    "intention_em": "src/homeo_intention/em.py",
-    "world": "src/homeo_sim/world.py",
-    "body": "src/homeo_sim/body.py",
-    "human": "src/homeo_sim/human.py",
+SIM = ["test_sim_world_human.py", "test_energy_readings.py", "test_fidelity.py", "test_scenario.py"]
+DECISION = ["test_objectq.py", "test_reward.py", "test_baselines.py", "test_determinism.py"]
+MODULES = {  # module -> its source file and the fast ROS-free tests of it (with tests/test_core_cases.py: the
+    # cases written by hand for its survivors); mutmut runs, for each mutant, those of them that call it
+    "reward": ("src/homeo_decision/reward.py", DECISION),
+    "objectq": ("src/homeo_decision/objectq.py", DECISION),
+    "motivation": ("src/homeo_decision/motivation.py", ["test_motivation.py", "test_fidelity.py"]),
+    "drives": ("src/homeo_decision/drives.py", ["test_motivation.py", *SIM]),
+    "agent": ("src/homeo_decision/agent.py", DECISION),
+    "metrics": ("src/homeo_sim/metrics.py", ["test_metrics.py", "test_sim_world_human.py"]),
+    "intention_model": ("src/homeo_intention/model.py", ["test_intention_core.py"]),
+    "intention_em": ("src/homeo_intention/em.py", ["test_intention_core.py"]),
+    "world": ("src/homeo_sim/world.py", SIM),
+    "body": ("src/homeo_sim/body.py", SIM),
+    "human": ("src/homeo_sim/human.py", SIM),
 }
-# fast and ROS-free: the core's tests (no node graph, no libqi)
-TESTS = ["test_reward.py", "test_objectq.py", "test_motivation.py", "test_metrics.py", "test_intention_core.py",
-         "test_sim_world_human.py", "test_baselines.py", "test_determinism.py", "test_energy_readings.py",
-         "test_fidelity.py", "test_scenario.py", "test_core_cases.py"]
 
 # mutant -> why no test can tell it from the original (it computes the same thing on every input)
 EQUIVALENT: dict[str, str] = {
 }
 
 
-def _mutmut_config(source: str) -> str:
-    tests = ", ".join(json.dumps(str(ROOT / "tests" / t)) for t in TESTS if (ROOT / "tests" / t).is_file())
+def _mutmut_config(source: str, tests: list) -> str:
+    tests = ", ".join(json.dumps(str(ROOT / "tests" / t)) for t in [*tests, "test_core_cases.py"])
     return ("[tool.mutmut]\n"
             'source_paths = ["src"]\n'
             f"only_mutate = [{json.dumps(source)}]\n"
@@ -67,12 +66,13 @@ def _fresh_copy(work: Path, source: str) -> None:
 
 
 def run_module(name: str, jobs: int, budget: float) -> dict:
-    source = MODULES[name]
+    source, tests = MODULES[name]
     work = OUT / name
     work.mkdir(parents=True, exist_ok=True)
-    (work / "pyproject.toml").write_text(_mutmut_config(source))
-    if not (work / "src").exists():
-        (work / "src").symlink_to(ROOT / "src")
+    (work / "pyproject.toml").write_text(_mutmut_config(source, tests))
+    for d in ("src", "tests"):  # mutmut names tests by their path from here when it finds new ones
+        if not (work / d).exists():
+            (work / d).symlink_to(ROOT / d)
     _fresh_copy(work, source)
     mutmut = [str(Path(sys.executable).with_name("mutmut"))]
     env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1")
