@@ -75,9 +75,9 @@ def _look_at_tick(tick: int, env: dict, bound: float = 60.0) -> dict:
     until the robot acts): a person who looks late still sees it."""
     end = time.monotonic() + bound
     while True:
-        seen = _look("/homeo/last_action", env)
-        if seen["tick"] >= tick or time.monotonic() > end:
-            assert seen["tick"] == tick, seen
+        seen = _look("/homeo/last_action", env, must=False)  # None: echo has not yet discovered the topic
+        if (seen is not None and seen["tick"] >= tick) or time.monotonic() > end:
+            assert seen is not None and seen["tick"] == tick, seen
             return seen
 
 
