@@ -4,12 +4,18 @@
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
 
 from homeo_sim.metrics import (AccuracyEnds, MetricRecorder, accuracy_curve, accuracy_ends, cumulative_series,
                                summarize)
+
+def refused(message: str):
+    """The whole one-line message: a part of it would let a message with anything added pass."""
+    return pytest.raises(ValueError, match=f"^{re.escape(message)}$")
+
 
 # -- metrics (Section 4.1) ---------------------------------------------------------------------------
 # three ticks, two drives with thresholds 0 and 50
@@ -63,32 +69,56 @@ def test_the_boundaries_of_secure_and_of_excess():
     assert out["HSR"] == 1.0 and out["intentions"] == 1
     assert math.isnan(summarize(DRIVES[:1], np.array([False]), np.array([False]), NAMES, THR)["HSR"])
     empty = MetricRecorder(NAMES, THR)
-    with pytest.raises(ValueError, match="no iterations recorded"):
+    with refused("no iterations recorded"):
         empty.summary()
-    with pytest.raises(ValueError, match="no iterations recorded"):
+    with refused("no iterations recorded"):
         summarize(DRIVES[:0], EXPRESSED[:0], SATISFIED[:0], NAMES, THR)
-    with pytest.raises(ValueError, match=r"keep=True"):
+    with refused("this recorder keeps no per-tick history (MetricRecorder(keep=True))"):
         empty.arrays()
+    rec = MetricRecorder(NAMES, THR, keep=True)
+    rec.record([50, 50], 0, 0)  # integers, as a caller may give them: the arrays are numbers and truths
+    rec.record([50.5, 49.0], 1, 1)  # 0.5 above the threshold counts 0.5 (Eq 4.4)
+    d, e, s = rec.arrays()
+    assert (d.dtype, e.dtype, s.dtype) == (np.float64, np.bool_, np.bool_) and d.shape == (2, 2)
+    assert rec.summary()["CEDA"]["A"] == 50.25 and rec.summary()["CEDA"]["B"] == 0.0
+    silent = MetricRecorder(NAMES, THR)
+    silent.record([1.0, 1.0], False, False)
+    assert math.isnan(silent.summary()["HSR"]) and silent.summary()["RSR"] == 1.0  # no intention: HSR undefined
 
 
 GOOD = {"n": 3, "intentions": 2, "satisfied": 1, "secure": 2, "sum": [30.0, 195.0], "excess": [30.0, 55.0]}
 
 
+COUNTS, SUMS = "metric counts must be integers >= 0", "metric sum must be 2 finite numbers >= 0"
+
+
 @pytest.mark.parametrize("bad,words", [
     ("x", "not a metrics state"),
-    (dict(GOOD, n=-1), "integers >= 0"), (dict(GOOD, n=3.0), "integers >= 0"), (dict(GOOD, secure=True), "integers >= 0"),
-    (dict(GOOD, intentions=4), "inconsistent"), (dict(GOOD, satisfied=3), "inconsistent"), (dict(GOOD, secure=4), "inconsistent"),
-    (dict(GOOD, sum=[1.0]), "metric sum must be 2 finite"), (dict(GOOD, sum=[1.0, -1.0]), "metric sum"),
-    (dict(GOOD, sum=[1.0, float("nan")]), "metric sum"), (dict(GOOD, sum=[1.0, "2"]), "metric sum"),
-    (dict(GOOD, excess=None), "metric excess must be 2 finite"), (dict(GOOD, excess=[0.0, float("inf")]), "metric excess"),
+    (dict(GOOD, n=-1), COUNTS), (dict(GOOD, n=3.0), COUNTS), (dict(GOOD, secure=True), COUNTS),
+    (dict(GOOD, intentions=4), "inconsistent metric counts [3, 4, 1, 2]"),
+    (dict(GOOD, satisfied=3), "inconsistent metric counts [3, 2, 3, 2]"),
+    (dict(GOOD, secure=4), "inconsistent metric counts [3, 2, 1, 4]"),
+    (dict(GOOD, sum=[1.0]), SUMS), (dict(GOOD, sum=[1.0, -1.0]), SUMS), (dict(GOOD, sum=[1.0, float("nan")]), SUMS),
+    (dict(GOOD, sum=[1.0, "2"]), SUMS), (dict(GOOD, excess=None), "metric excess must be 2 finite numbers >= 0"),
+    (dict(GOOD, excess=[0.0, float("inf")]), "metric excess must be 2 finite numbers >= 0"),
 ])
 def test_a_metrics_state_is_refused_whole(bad, words):
     rec = MetricRecorder(NAMES, THR)
     rec.record([1.0, 2.0], True, False)
     before = rec.state()
-    with pytest.raises(ValueError, match=words):
+    with refused(words):
         rec.set_state(bad)
     assert rec.state() == before  # nothing changed
+
+
+def test_a_metrics_state_at_its_bounds_is_taken():
+    rec = MetricRecorder(NAMES, THR)
+    zero = {"n": 0, "intentions": 0, "satisfied": 0, "secure": 0, "sum": [0.0, 0], "excess": [0, 0.0]}
+    rec.set_state(zero)  # nothing recorded yet: zeros, integer or not
+    assert rec.state() == dict(zero, sum=[0.0, 0.0], excess=[0.0, 0.0]) and rec.n == 0
+    full = {"n": 2, "intentions": 2, "satisfied": 2, "secure": 2, "sum": [0.5, 3], "excess": [0.5, 0.25]}
+    rec.set_state(full)  # every tick with an intention, each satisfied, each secure
+    assert rec.summary()["HSR"] == 1.0 and rec.summary()["RSR"] == 1.0 and rec.summary()["CDA"]["A"] == 0.25
 
 
 def test_a_metrics_state_goes_on_as_the_uninterrupted_run():
@@ -104,8 +134,28 @@ def test_a_metrics_state_goes_on_as_the_uninterrupted_run():
         rec.record(DRIVES[2].tolist(), True, False)
     assert later.state() == whole.state() == GOOD
     assert later.summary() == whole.summary()
-    with pytest.raises(ValueError, match="keeps every tick"):
+    with refused("a recorder that keeps every tick cannot take a running-sums state"):
         MetricRecorder(NAMES, THR, keep=True).set_state(GOOD)
+
+
+def test_the_recorder_follows_the_robot_tick_by_tick(thesis):
+    """``follow`` and ``on_tick`` as the runner uses them: d(t) after each tick, the human's truth from the outcome."""
+    from homeo_decision.agent import DecisionCore
+    from homeo_decision.robot import OracleRecognition, Robot, run_loop
+    from homeo_sim.environment import SimEnvironment
+
+    robot = Robot(thesis, DecisionCore(thesis, 2), OracleRecognition(thesis))
+    rec = MetricRecorder(thesis.drive_names, [d.threshold for d in thesis.drives], keep=True).follow(robot.perception)
+    seen = []
+
+    def hook(t, p, r, a, out):
+        rec.on_tick(t, p, r, a, out)
+        seen.append((list(robot.perception.drives), out.true_intention != 0, out.satisfied))
+
+    run_loop(SimEnvironment(thesis, 2), robot, 200, on_tick=hook)
+    d, e, s = rec.arrays()
+    assert d.tolist() == [x[0] for x in seen] and e.tolist() == [x[1] for x in seen] and s.tolist() == [x[2] for x in seen]
+    assert 0 < e.sum() < 200 and 0 < s.sum() < e.sum()  # both kinds of tick, both kinds of answer
 
 
 def test_accuracy_at_both_ends_and_per_window():
@@ -113,12 +163,14 @@ def test_accuracy_at_both_ends_and_per_window():
     assert accuracy_ends(hits, 2) == {"first_2": 0.5, "last_2": 0.5}
     assert accuracy_ends(hits[:4], 2) == {"first_2": 0.5, "last_2": 1.0}
     assert accuracy_ends(hits, 10) == {"first_10": 0.6, "last_10": 0.6}  # a shorter run: the whole of it
-    with pytest.raises(ValueError, match="no iterations"):
+    assert accuracy_ends(hits) == {"first_500": 0.6, "last_500": 0.6}  # the window of docs/INTENTION.md: 500
+    with refused("no iterations recorded"):
         accuracy_ends([])
     assert accuracy_curve(hits, 2) == [0.5, 1.0]  # the fifth tick's window of one is dropped
     assert accuracy_curve(hits, 5) == [0.6] and accuracy_curve(hits, 6) == []
+    assert accuracy_curve(hits * 50) == [0.6]  # 250 ticks a window by default
     ends = AccuracyEnds(2)
-    with pytest.raises(ValueError, match="no iterations"):
+    with refused("no iterations recorded"):
         ends.ends()
     ends.append(True)
     assert len(ends) == 1 and ends.ends() == {"first_2": 1.0, "last_2": 1.0}
@@ -130,17 +182,23 @@ def test_accuracy_at_both_ends_and_per_window():
     again.set_state(ends.state())
     again.append(True)
     assert again.state() == {"window": 2, "first": "10", "last": "01"} and again.ends() == {"first_2": 0.5, "last_2": 0.5}
+    again.set_state({"window": 2, "first": "1", "last": "11"})
+    assert again.ends() == {"first_2": 1.0, "last_2": 1.0}
+
+
+HITS = "accuracy hits must be strings of 0 and 1, at most 2 long"
 
 
 @pytest.mark.parametrize("bad,words", [
-    ([], "window 2"), ({"window": 3, "first": "", "last": ""}, "window 2"),
-    ({"window": 2, "first": 1, "last": "1"}, "strings of 0 and 1"), ({"window": 2, "first": "1", "last": "012"}, "at most 2"),
-    ({"window": 2, "first": "1", "last": "1x"}, "strings of 0 and 1"), ({"window": 2, "first": "11", "last": "1"}, "fewer last"),
+    ([], "not an accuracy state of window 2"), ({"window": 3, "first": "", "last": ""}, "not an accuracy state of window 2"),
+    ({"window": 2, "first": 1, "last": "1"}, HITS), ({"window": 2, "first": "1", "last": "012"}, HITS),
+    ({"window": 2, "first": "1", "last": "1x"}, HITS), ({"window": 2, "first": "X", "last": "1X"}, HITS),
+    ({"window": 2, "first": "11", "last": "1"}, "accuracy hits: fewer last than first"),
 ])
 def test_an_accuracy_state_is_refused_whole(bad, words):
     ends = AccuracyEnds(2)
     ends.append(True)
-    with pytest.raises(ValueError, match=words):
+    with refused(words):
         ends.set_state(bad)
     assert ends.state() == {"window": 2, "first": "1", "last": "1"}
 
@@ -220,27 +278,71 @@ def test_a_human_state_goes_on_with_the_same_draws(thesis):
     assert h.seed == 9 and h.state()["obs_rng"] == SimHuman(thesis, 9).state()["obs_rng"]
 
 
+SEED, IT, BOOLS = ("human seed must be an integer in 0..2^31-1, got {}",
+                    "human intention must be an index of the scenario's intentions, got {}",
+                    "human present and satisfied must be true or false")
+
+
 @pytest.mark.parametrize("change,words", [
     (None, "not a human state"),
-    ({"seed": -1}, "human seed must be an integer in 0..2\\^31-1"), ({"seed": 2**31}, "human seed"),
-    ({"seed": True}, "human seed"), ({"seed": 5.0}, "human seed"),
-    ({"intention": -1}, "human intention must be an index"), ({"intention": 7}, "human intention"),
-    ({"intention": False}, "human intention"),
-    ({"present": 1}, "present and satisfied must be true or false"), ({"satisfied": "no"}, "present and satisfied"),
-    ({"rng": None}, "human stream: not a random-stream state"), ({"rng": {"block": 0, "drawn": 1.0}}, "human stream"),
+    ({"seed": -1}, SEED.format(-1)), ({"seed": 2**31}, SEED.format(2**31)), ({"seed": True}, SEED.format(True)),
+    ({"seed": 5.0}, SEED.format(5.0)), ({"intention": -1}, IT.format(-1)), ({"intention": 7}, IT.format(7)),
+    ({"intention": False}, IT.format(False)), ({"present": 1}, BOOLS), ({"satisfied": "no"}, BOOLS),
+    ({"rng": None}, "human stream: not a random-stream state"),
+    ({"rng": {"block": 0, "drawn": 1.0}}, "human stream: not a random-stream state"),
     ({"obs_rng": {"block": "0", "drawn": 0}}, "observation stream: not a random-stream state"),
 ])
 def test_a_human_state_is_refused_whole(thesis, change, words):
     h = _human(thesis)
     before = h.state()
-    with pytest.raises(ValueError, match=words):
+    with refused(words):
         h.set_state("x" if change is None else dict(before, **change))
     assert h.state() == before
 
 
 def test_a_human_state_at_its_bounds_is_taken(thesis):
     h = _human(thesis)
+    h.set_state(dict(h.state(), seed=0, intention=0))  # the lowest seed and no intention
+    assert (h.seed, h.intention) == (0, 0)
     st = dict(h.state(), seed=2**31 - 1, intention=len(thesis.intention_names) - 1, present=False, satisfied=True)
     st["rng"] = dict(st["rng"])  # a stream state is the seed's: it goes on under the new seed's generator
     h.set_state(st)
     assert (h.seed, h.intention, h.present, h.satisfied) == (2**31 - 1, 6, False, True)
+
+
+def test_the_human_answers_as_algorithm_2_says(thesis):
+    """Lines 8-19 with each reveal rule (the open choice intention_reveal) and a proposal always / never made."""
+    from homeo_decision.environment import Outcome
+    from homeo_sim.human import SimHuman
+
+    h = SimHuman(thesis, 0)
+    light, on, play = thesis.intention_names.index("light"), thesis.action_index("LightOn"), thesis.action_index("Play")
+    assert h.respond(play) == Outcome(play, 0, None, None, None, 0, False)  # no intention: no answer
+    h.intention, h.reveal = light, "feedback"
+    assert h.respond(on) == Outcome(on, 1, None, light, None, light, True) and h.satisfied  # praise reveals it
+    h.satisfied, h.reveal, h.p_propose = False, "proposal", 1.0
+    assert h.respond(on) == Outcome(on, 1, None, None, None, light, True)  # praise alone does not
+    assert h.respond(play) == Outcome(play, -1, on, light, None, light, False)  # a scolding with the proposal does
+    h.reveal = "never"
+    assert h.respond(play) == Outcome(play, -1, on, None, None, light, False)
+    h.reveal, h.p_propose = "proposal", 0.0
+    assert h.respond(play) == Outcome(play, -1, None, None, None, light, False)  # no proposal: nothing revealed
+
+
+def test_the_proposal_names_the_rule_s_desired_action(thesis):
+    from homeo_sim.human import SimHuman
+
+    h = SimHuman(thesis, 0)
+    leave, light = thesis.intention_names.index("leave"), thesis.intention_names.index("light")
+    to_r, to_c = thesis.action_index("MoveToR"), thesis.action_index("MoveToC")
+    h.p_propose = 1.0
+    h.proposal_choice = "first"
+    assert h.proposal(leave) == to_r and h.proposal(light) == thesis.action_index("LightOn")
+    h.proposal_choice = "MoveToC"
+    assert h.proposal(leave) == to_c
+    h.proposal_choice = "Play"  # not one of leave's desired actions: the first
+    assert h.proposal(leave) == to_r
+    h.proposal_choice = "random"
+    assert {h.proposal(leave) for _ in range(40)} == {to_r, to_c}
+    h.p_propose = 0.0
+    assert h.proposal(leave) is None

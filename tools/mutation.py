@@ -39,7 +39,7 @@ MODULES = {  # module -> its source file and the fast ROS-free tests of it (with
     "intention_em": ("src/homeo_intention/em.py", ["test_intention_core.py"]),
     "world": ("src/homeo_sim/world.py", SIM),
     "body": ("src/homeo_sim/body.py", SIM),
-    "human": ("src/homeo_sim/human.py", SIM),
+    "human": ("src/homeo_sim/human.py", [*SIM, "test_intention_sim.py"]),  # its observations: the intention tests
 }
 
 # mutant -> why no test can tell it from the original (it computes the same thing on every input)
