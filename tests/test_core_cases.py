@@ -291,6 +291,7 @@ SEED, IT, BOOLS = ("human seed must be an integer in 0..2^31-1, got {}",
     ({"rng": None}, "human stream: not a random-stream state"),
     ({"rng": {"block": 0, "drawn": 1.0}}, "human stream: not a random-stream state"),
     ({"obs_rng": {"block": "0", "drawn": 0}}, "observation stream: not a random-stream state"),
+    ({"rng": {"block": 0, "drawn": -1}}, "human stream: not a random-stream state (block 0, drawn -1)"),
 ])
 def test_a_human_state_is_refused_whole(thesis, change, words):
     h = _human(thesis)
@@ -308,6 +309,19 @@ def test_a_human_state_at_its_bounds_is_taken(thesis):
     st["rng"] = dict(st["rng"])  # a stream state is the seed's: it goes on under the new seed's generator
     h.set_state(st)
     assert (h.seed, h.intention, h.present, h.satisfied) == (2**31 - 1, 6, False, True)
+
+
+def test_the_human_reveals_by_its_scenario_s_rule(toy_raw):
+    from homeo_decision.scenario import scenario_from_dict
+    from homeo_sim.human import SimHuman
+
+    raw = toy_raw()
+    raw["open"]["intention_reveal"] = "feedback"
+    sc = scenario_from_dict(raw)
+    h = SimHuman(sc)
+    assert h.seed == 0 and h.reveal == "feedback"  # the default seed; the open choice as the scenario says
+    h.intention = sc.intention_names.index("on")
+    assert h.respond(sc.action_index("TurnOn")).clarified == h.intention  # praise reveals the intention
 
 
 def test_the_human_answers_as_algorithm_2_says(thesis):
@@ -346,3 +360,23 @@ def test_the_proposal_names_the_rule_s_desired_action(thesis):
     assert {h.proposal(leave) for _ in range(40)} == {to_r, to_c}
     h.p_propose = 0.0
     assert h.proposal(leave) is None
+
+
+def test_the_human_is_observed_by_its_habits(thesis):
+    """Each channel drawn from the intention's habit row (its inverse CDF), or uniformly with the channel's noise."""
+    from homeo_sim.human import SimHuman
+
+    h, n = SimHuman(thesis, 4), 4000
+    spec = thesis.observations
+    for name in ("light", "leave", "none"):
+        h.intention = thesis.intention_names.index(name)
+        draws = [h.observe() for _ in range(n)]
+        for ch in ("gesture", "movement", "keyword"):
+            row = spec.habits[ch][h.intention]
+            got = [sum(d[ch] == sym for d in draws) / n for sym in spec.alphabets[ch]]
+            assert got == pytest.approx(row, abs=0.03), (name, ch)
+    assert h.observe(with_intention=True)["intention"] == "none"
+    ch, symbols, _, cum = h._habits[0]  # the gesture channel, all noise now
+    h._habits = ((ch, symbols, 1.0, cum), *h._habits[1:])
+    gestures = [h.observe()["gesture"] for _ in range(n)]
+    assert [gestures.count(s) / n for s in symbols] == pytest.approx([1 / len(symbols)] * len(symbols), abs=0.03)
