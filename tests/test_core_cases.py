@@ -380,3 +380,31 @@ def test_the_human_is_observed_by_its_habits(thesis):
     h._habits = ((ch, symbols, 1.0, cum), *h._habits[1:])
     gestures = [h.observe()["gesture"] for _ in range(n)]
     assert [gestures.count(s) / n for s in symbols] == pytest.approx([1 / len(symbols)] * len(symbols), abs=0.03)
+
+
+def test_perception_breaks_a_tie_by_the_scenario_s_rule(toy_raw, enc):
+    """Eq 3.3 with equal intensities: the open choice tie_break ('first' in the toy, 'last' declared)."""
+    from homeo_decision.agent import DecisionCore
+    from homeo_decision.scenario import scenario_from_dict
+
+    for rule, m_dom in (("first", 0), ("last", 1)):
+        raw = toy_raw()
+        raw["open"]["tie_break"] = rule
+        sc = scenario_from_dict(raw)
+        core = DecisionCore(sc, 0)
+        code = enc(sc, "H")  # no intention: no stimulus; NAch 60 (threshold 0) and NEng 60 (threshold 50)
+        p = core.perceive([60.0, 60.0], code)
+        assert (p.intensities, p.m_dom) == ([60.0, 60.0], m_dom), rule
+        q = core.percept(code, (60.0, 60.0), [60.0, 60.0], m_dom)
+        assert (q.intensities, q.m_dom, q.states) == (p.intensities, p.m_dom, p.states)
+
+
+def test_the_parameters_given_win_over_the_scenario_s(thesis):
+    from homeo_decision.agent import DecisionCore
+
+    core = DecisionCore(thesis, 0, gamma=0.9, pseudo_update=False, feedback=False, feedback_value=0.0)
+    assert (core.gamma, core.pseudo_update, core.feedback, core.f) == (0.9, False, False, 0.0)  # f = 0 is allowed
+    assert DecisionCore(thesis, 0).f == 10.0  # Table 4.4's f
+    with refused("feedback value must be >= 0, got -1"):
+        core.set_params(feedback_value=-1)
+    assert core.f == 0.0

@@ -45,7 +45,15 @@ MODULES = {  # module -> its source file and the fast ROS-free tests of it (with
 # mutant -> why no test can tell it from the original (it computes the same thing on every input)
 DRAW = ("a uniform draw on [0, 1) compared with a probability: < and <= (>= and >) differ only when the draw equals "
         "it exactly, one 53-bit float in 2^53; no seed of a test reaches it")
+CACHE = "the phase cache's span: the same phase is found again for each of its ticks"
 EQUIVALENT: dict[str, str] = {
+    # DecisionCore.phase caches the phase of a span of ticks; these change only when it is looked up again
+    # (phase_at gives the same phase for every tick of the span), or an empty span the first lookup fills
+    **{f"homeo_decision.agent.xǁDecisionCoreǁ{m}": CACHE for m in (
+        "__init____mutmut_36", "__init____mutmut_37", "__init____mutmut_38", "phase__mutmut_4", "phase__mutmut_12",
+        "phase__mutmut_14", "phase__mutmut_15", "phase__mutmut_16", "set_tick_offset__mutmut_7",
+        "set_tick_offset__mutmut_9")},
+    "homeo_decision.agent.xǁDecisionCoreǁphase__mutmut_23": 'float("INF") is float("inf")',
     "homeo_sim.human.xǁSimHumanǁadvance__mutmut_2": DRAW,  # u < p_leave
     "homeo_sim.human.xǁSimHumanǁadvance__mutmut_6": DRAW,  # u < p_return
     "homeo_sim.human.xǁSimHumanǁadvance__mutmut_14": DRAW,  # random() < p_none
