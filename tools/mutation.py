@@ -106,15 +106,17 @@ def run_module(name: str, jobs: int, budget: float) -> dict:
     mutmut = [str(Path(sys.executable).with_name("mutmut"))]
     env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1")
     t = time.monotonic()
-    # mutmut keeps a verdict until the mutant changes: the survivors of an earlier run are named again, so that
-    # the tests written since for them are run on them
-    again = [k for k, st in results(mutmut, work).items() if st == "survived"]
+    # mutmut keeps a verdict until the mutant changes: the survivors of an earlier run lose theirs, so that the
+    # tests written since for them are run on them
+    meta = work / "mutants" / (source + ".meta")
+    if meta.is_file():
+        data = json.loads(meta.read_text())
+        data["exit_code_by_key"] = {k: (None if v == 0 else v) for k, v in data["exit_code_by_key"].items()}
+        meta.write_text(json.dumps(data))
     try:
         with open(work / "run.log", "w") as log:
-            for names in ([], again) if again else ([],):
-                subprocess.run(["nice", "-n", "10", *mutmut, "run", "--max-children", str(jobs), *names], cwd=work,
-                               env=env, stdout=log, stderr=subprocess.STDOUT, check=False,
-                               timeout=max(1.0, budget - (time.monotonic() - t)))
+            subprocess.run(["nice", "-n", "10", *mutmut, "run", "--max-children", str(jobs)], cwd=work, env=env,
+                           stdout=log, stderr=subprocess.STDOUT, timeout=budget, check=False)
     except subprocess.TimeoutExpired:
         print(f"  {name}: stopped after its budget of {budget:.0f} s; the next run goes on from here", file=sys.stderr)
     return {"status": results(mutmut, work), "seconds": time.monotonic() - t}
