@@ -58,6 +58,7 @@ def test_summary_by_hand_and_the_recorder_agrees():
     d, e, s = rec.arrays()
     assert d.tolist() == DRIVES.tolist() and e.tolist() == EXPRESSED.tolist() and s.tolist() == SATISFIED.tolist()
     assert rec.series()["CDA"]["all"].tolist() == [35.0, 46.25, 37.5]
+    assert rec.series()["CEDA"]["B"].tolist() == pytest.approx([10.0, 27.5, 55.0 / 3])  # its thresholds
 
 
 def test_the_boundaries_of_secure_and_of_excess():
@@ -397,6 +398,10 @@ def test_perception_breaks_a_tie_by_the_scenario_s_rule(toy_raw, enc):
         assert (p.intensities, p.m_dom) == ([60.0, 60.0], m_dom), rule
         q = core.percept(code, (60.0, 60.0), [60.0, 60.0], m_dom)
         assert (q.intensities, q.m_dom, q.states) == (p.intensities, p.m_dom, p.states)
+        from homeo_decision.baselines import FlatQ  # a baseline perceives through the shared Perceiving
+
+        f = FlatQ(sc).percept(code, (60.0, 60.0), [60.0, 60.0], m_dom)
+        assert (f.intensities, f.m_dom) == ([60.0, 60.0], m_dom)
 
 
 def test_the_parameters_given_win_over_the_scenario_s(thesis):
@@ -408,3 +413,60 @@ def test_the_parameters_given_win_over_the_scenario_s(thesis):
     with refused("feedback value must be >= 0, got -1"):
         core.set_params(feedback_value=-1)
     assert core.f == 0.0
+
+
+# -- drives (Tables 4.1-4.2, Definition 1: every drive in [0, 100]) ---------------------------------------------
+def test_drives_are_clamped_at_both_ends_and_nowhere_else(toy_raw, enc):
+    from homeo_decision.drives import DriveDynamics, DriveModel
+    from homeo_decision.scenario import scenario_from_dict
+
+    raw = toy_raw()
+    raw["drives"][1]["rate"] = 0.5  # NEng (body) grows 0.5 a tick
+    raw["actions"][3]["effects"] = [{"set": {"robot.location": "B"}, "drives": {"NEng": -0.5}}]  # GoB lowers it
+    sc = scenario_from_dict(raw)
+    body = DriveDynamics(sc, "body")
+    go_b = sc.action_index("GoB")
+    for start, after_time, after_action in ((99.75, 100.0, 99.5), (100.0, 100.0, 99.5), (0.25, 0.75, 0.25),
+                                            (0.0, 0.5, 0.0), (99.6, 100.0, 99.5)):
+        body.values[1] = start
+        body.apply_time()
+        assert body.values[1] == after_time, start  # 100.25 -> 100, nothing else moved
+        body.values[1] = after_time
+        body.apply_action(enc(sc, "H"), go_b)
+        assert body.values[1] == after_action, start
+    body.values[1] = 0.25
+    body.apply_action(enc(sc, "H"), go_b)
+    assert body.values[1] == 0.0  # -0.25 -> 0
+    m = DriveModel(sc)
+    assert m.values == [float(v) for v in sc.open.initial_drives]  # the body drive too, before any reading
+    for given, kept in (([5.0, -3.0], 0.0), ([5.0, 0.5], 0.5), ([5.0, 100.5], 100.0), ([5.0, 99.5], 99.5), ([5.0, 100], 100.0)):
+        m.set_body(given)
+        assert m.values[1] == kept and m.values[0] == sc.open.initial_drives[0]  # the internal drive is its own
+
+
+def test_feedback_moves_the_serving_drive_only_when_given(toy_raw):
+    from homeo_decision.drives import DriveModel
+    from homeo_decision.scenario import scenario_from_dict
+
+    raw = toy_raw()
+    raw["open"]["scold_drive_change"] = 5.0
+    raw["open"]["initial_drives"] = {"NAch": 50.0, "NEng": 0.0}
+    m = DriveModel(scenario_from_dict(raw))
+    m.apply_feedback(0)
+    assert m.values[0] == 50.0  # no answer: nothing
+    m.apply_feedback(-1)
+    assert m.values[0] == 55.0  # a scolding: the open choice's +5
+    m.apply_feedback(1)
+    assert m.values[0] == 45.0  # praise: -10 (Section 4.2.1)
+    m.apply_time()  # the defaults: an intention expressed, not satisfied; serving_growth always: +3 and +2
+    assert m.values == [48.0, 0.0]  # the body drive is the body's: it does not grow here
+
+
+def test_a_drive_growing_always_is_never_still(toy_raw, enc):
+    from homeo_decision.drives import DriveDynamics
+    from homeo_decision.scenario import scenario_from_dict
+
+    raw = toy_raw()
+    raw["open"]["drive_growth"] = {"NEng": "always"}
+    sc = scenario_from_dict(raw)
+    assert DriveDynamics(sc, "body").still(enc(sc, "H"), sc.action_index("GoB")) == ()

@@ -54,6 +54,13 @@ EQUIVALENT: dict[str, str] = {
         "phase__mutmut_14", "phase__mutmut_15", "phase__mutmut_16", "set_tick_offset__mutmut_7",
         "set_tick_offset__mutmut_9")},
     "homeo_decision.agent.xǁDecisionCoreǁphase__mutmut_23": 'float("INF") is float("inf")',
+    **{f"homeo_decision.drives.xǁ{m}": "a clamp's boundary moved onto the bound gives the bound's own value (0 or 100)"
+       for m in ("DriveDynamicsǁapply_action__mutmut_9", "DriveDynamicsǁapply_action__mutmut_14",
+                 "DriveDynamicsǁapply_time__mutmut_11", "DriveDynamicsǁapply_time__mutmut_16",
+                 "DriveModelǁset_body__mutmut_7", "DriveModelǁset_body__mutmut_12")},
+    "homeo_decision.drives.xǁDriveDynamicsǁ__init____mutmut_10": "the drives outside the dynamics' subset are never read",
+    "homeo_decision.drives.xǁDriveModelǁapply_time__mutmut_29": "no drive has index -2 either: none is skipped",
+    "homeo_sim.metrics.x_summarize__mutmut_28": "numpy's 0 / 0 is nan, as the guarded branch gives",
     "homeo_sim.human.xǁSimHumanǁadvance__mutmut_2": DRAW,  # u < p_leave
     "homeo_sim.human.xǁSimHumanǁadvance__mutmut_6": DRAW,  # u < p_return
     "homeo_sim.human.xǁSimHumanǁadvance__mutmut_14": DRAW,  # random() < p_none
