@@ -117,7 +117,8 @@ def test_a_small_bench_prints_each_round_the_checkpoints_share_and_where_the_tim
     table = out[out.index("ms a tick"):].splitlines()
     assert table[0].split()[-4:] == ["homeo_world", "homeo_intention", "homeo_drives", "homeo_decision"], out
     rows = {ln.split("  ")[0] for ln in table[2:]}
-    assert {"decode", "HMAC check", "core step", "encode", "sign", "publish", "waiting"} <= rows, out
+    # a category is a row once py-spy caught it: signing (microseconds) went uncaught in a full run at load 15
+    assert {"decode", "core step", "publish", "waiting"} <= rows, out
     # every node's categories add up to the tick (each sample is in one of them)
     cells = {ln.split("  ")[0]: [float(x) for x in re.findall(r"(\d+\.\d+) \(\s*\d+\.\d%\)", ln)]
              for ln in table[2:]}
