@@ -10,7 +10,7 @@ PY     := $(shell $(PYTHON) -c 'import sys; print(sys.executable)' 2>/dev/null |
 # the real ros2 command line and launch system (wheels of their Jazzy sources), for the workspace tests
 ROS2_TOOLS ?= $(wildcard ../shared/ros2-tools)
 
-.PHONY: setup run test test-core test-py312 ros2-tools bench report calibrate-setup profile-setup clean
+.PHONY: setup run test test-core test-py312 ros2-tools bench report calibrate-setup profile-setup mutation-setup mutation clean
 
 setup: $(STAMP)
 
@@ -65,6 +65,17 @@ calibrate-setup: setup
 # the profiler of `homeo-launch bench --profile` (a tool dependency: py-spy; its test runs with `make test`)
 profile-setup: setup
 	$(BIN)/pip install --disable-pip-version-check -q --no-deps -r tools/requirements-profile.lock
+
+# the mutation tester of `make mutation` (a tool dependency: mutmut; not part of `make test`)
+mutation-setup: setup
+	$(BIN)/pip install --disable-pip-version-check -q --no-deps -r tools/requirements-mutation.lock
+
+# a benchmark, not a test: the core's mutation score per module (tools/mutation.py; results kept in out/mutation/,
+# a rerun tests only what changed). MUTATION_JOBS mutmut children, MUTATION_BUDGET wall seconds per module.
+MUTATION_JOBS ?= 1
+MUTATION_BUDGET ?= 1800
+mutation: mutation-setup
+	$(BIN)/python tools/mutation.py --jobs $(MUTATION_JOBS) --budget $(MUTATION_BUDGET) $(MODULES)
 
 clean:
 	rm -rf $(VENV) .venv312 build install log src/*.egg-info

@@ -26,10 +26,7 @@ def test_table_4_5_targets_over_20_seeds():
     assert proc.returncode == 0, proc.stderr
     m = json.loads(proc.stdout)["metrics"]
     assert m["HSR"]["mean"] >= 0.78
-    # issue 2 asked RSR >= 0.85. Issue 15's open block gave up some RSR (0.825 over seeds 0-19); issue 25's
-    # (docs/FIDELITY.md) has 0.853 [0.823, 0.883] over seeds 0-19 and 0.879 over the 100 confirmation seeds
-    # (thesis 0.90). The bound guards the level of 20 seeds with room for their spread.
-    assert m["RSR"]["mean"] >= 0.80
+    assert m["RSR"]["mean"] >= 0.85  # issue 2's target; seeds 0-19 give 0.853 (docs/FIDELITY.md; thesis 0.90)
     assert m["CEDA"]["all"]["mean"] <= 6.0
     assert m["CDA"]["NAch"]["mean"] <= 5.0
 
@@ -68,16 +65,16 @@ def test_thesis_trends_over_10_seeds():
     x0, x2 = _mean(RunConfig(xi=0.0)), _mean(RunConfig(xi=2.0))
     assert x2["RSR"]["mean"] - x0["RSR"]["mean"] >= 0.20
     on, off = _mean(RunConfig()), _mean(RunConfig(pseudo_update=False))
-    # issue 6 asked >= 0.05 over the whole run. With issue 15's block (Q0 15: the robot explores every action
-    # early, so it also finds the serving actions without proposals) the gain over 5000 iterations is
-    # +0.037 over seeds 0-9 (was +0.085); the thesis places it "especially in the early stage", checked below.
-    assert on["HSR"]["mean"] - off["HSR"]["mean"] >= 0.02
+    # issue 6 also asked a whole-run HSR gain of the pseudo update >= 0.05: not met (+0.037 over seeds 0-9 since
+    # issue 15's block), so it is no test here; homeo-sim report prints it among the thesis's statements, and
+    # docs/FIDELITY.md says why. What the thesis says of it, "especially in the early stage", is checked below.
+    assert on["HSR"]["mean"] > off["HSR"]["mean"]
     assert on["CDA"]["NAch"]["mean"] < off["CDA"]["NAch"]["mean"]
 
 
 def test_pseudo_update_gain_is_early_over_10_seeds():
-    # Sec 4.2.4: "resulting in higher HSR, especially in the early stage". Cumulative HSR after 500 iterations,
-    # measured with issue 15's block over seeds 0-9: 0.524 with, 0.333 without (+0.19).
+    # Sec 4.2.4: "resulting in higher HSR, especially in the early stage": the gain in cumulative HSR after 500
+    # iterations larger than over the whole run (measured over seeds 0-9: +0.19 at 500, +0.04 at 5000).
     import numpy as np
 
     from homeo_sim.sweep import run_jobs
@@ -88,4 +85,4 @@ def test_pseudo_update_gain_is_early_over_10_seeds():
         i = int(np.searchsorted(rs[0].curves["t"], t, side="right")) - 1
         return float(np.mean([r.curves["HSR"][i] for r in rs]))
 
-    assert hsr_at(on, 500) - hsr_at(off, 500) >= 0.10
+    assert hsr_at(on, 500) - hsr_at(off, 500) > hsr_at(on, 5000) - hsr_at(off, 5000) > 0

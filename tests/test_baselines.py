@@ -126,8 +126,11 @@ def test_flatq_ignores_proposals(toy, enc):
     fq = FlatQ(toy)
     code = enc(toy, "H", intention="come")
     p = fq.perceive([10.0, 0.0], code)
-    fq.learn(p, toy.action_index("TurnOff"), [13.0, 2.0], -1, toy.action_index("GoH"), p, t=0)
-    assert fq.q[p.states[0]][toy.action_index("GoH")] == 0.0
+    out = fq.learn(p, toy.action_index("TurnOff"), [13.0, 2.0], -1, toy.action_index("GoH"), p, t=0)
+    # it learns (m_dom Serving: 30 against 0): r = 2 * (10 - 13) + (0 - 2) - 10 = -18, Q = 0.5 * (-18 + 0.5 * 0) = -9
+    assert out.reward == pytest.approx(-18.0)
+    assert fq.q[p.states[0]][toy.action_index("TurnOff")] == pytest.approx(-9.0)
+    assert fq.q[p.states[0]][toy.action_index("GoH")] == 0.0  # and the proposal teaches nothing
 
 
 # -- no feedback ------------------------------------------------------------------------------
@@ -138,7 +141,10 @@ def test_nofeedback_ignores_feedback_and_proposals(toy, enc):
     for fb, prop in ((+1, None), (0, None), (-1, toy.action_index("GoH"))):
         core = make_policy("nofeedback", toy)
         p = core.perceive([10.0, 0.0], code)
-        core.learn(p, toy.action_index("TurnOff"), [13.0, 2.0], fb, prop, p, t=0)
+        out = core.learn(p, toy.action_index("TurnOff"), [13.0, 2.0], fb, prop, p, t=0)
+        # the drives alone (m_dom Serving): r = 2 * (10 - 13) + (0 - 2) = -8, Q = 0.5 * (-8 + 0.5 * 0) = -4
+        assert out.reward == pytest.approx(-8.0)
+        assert core.q.q[0][p.states[0]][toy.action_index("TurnOff")] == pytest.approx(-4.0)
         qs.append([row[:] for o in core.q.q for row in o])
     assert qs[0] == qs[1] == qs[2]
 

@@ -154,9 +154,15 @@ def test_save_then_load_q(tmp_path):
     raw = json.loads(q.read_text())
     assert raw["schema"] == "homeo-qtable"
     assert any(v != 0.0 for t in raw["tables"].values() for row in t.values() for v in row.values())  # learned
-    proc = cli("run", "--iterations", 50, "--seed", 1, "--load-q", q, "--quiet")
+    q2 = tmp_path / "out" / "q2.json"
+    proc = cli("run", "--iterations", 1, "--seed", 1, "--load-q", q, "--save-q", q2, "--quiet")
     assert proc.returncode == 0, proc.stderr
     assert "loaded Q-table" in proc.stderr
+    # one tick learns at most a few entries (its update, the pseudo update): every other learned value is the loaded one
+    learned = {(o, s, a): v for o, t in raw["tables"].items() for s, row in t.items() for a, v in row.items() if v}
+    again = json.loads(q2.read_text())["tables"]
+    kept = sum(again[o][s][a] == v for (o, s, a), v in learned.items())
+    assert kept >= len(learned) - 3 and len(learned) > 20, (kept, len(learned))
 
 
 def test_installed_script():

@@ -17,7 +17,8 @@ from homeo_decision.hosts import DecisionHost, PerceptionHost
 from homeo_intention.recognition import RecognitionHost
 from homeo_ops.bus import Bus, BusGraph, graph_readers, robot_hosts
 from homeo_msgs_py.graph import BAYES, NODES, ORACLE
-from homeo_msgs_py.lockstep import DONE, LockstepDriver
+from homeo_msgs_py.lockstep import DONE, LockstepDriver, Stale
+from homeo_msgs_py.schemas import Rejected
 from homeo_sim.runner import RunConfig, run_episode
 from homeo_sim.world_backend import SimWorld
 
@@ -131,12 +132,12 @@ def test_lost_messages_cost_one_timeout_each_and_nothing_else(thesis):
                 if node == "homeo_world":
                     try:
                         driver.on_action(m)
-                    except Exception:  # noqa: BLE001 - a stale repeat is refused as on a real topic
-                        pass
+                    except Rejected as exc:  # a repeat of an action it has: refused as on a real topic
+                        assert str(exc).startswith(("stale tick", "duplicate action")), exc
                     continue
                 try:
                     out = hosts[node].stage.put(key, m)
-                except Exception:  # noqa: BLE001 - stale inputs are refused (Rejected) as in the node
+                except Stale:  # an input of a tick the node has left: refused as in the node
                     continue
                 for k, fields in out:
                     lossy(NODES[node].publishes[0], k, fields)

@@ -80,6 +80,9 @@ def test_threshold_turns_an_unsure_recognition_into_none(toy_sc):
     r = IntentionModel(toy_sc).recognise(obs)
     assert r.intention == 2 and r.confidence < 0.95
     assert IntentionModel(toy_sc, threshold=0.95).recognise(obs).intention == 0
+    # the boundary: "below the threshold" is none, a confidence exactly at it is recognised
+    assert IntentionModel(toy_sc, threshold=r.confidence).recognise(obs).intention == 2
+    assert IntentionModel(toy_sc, threshold=float(np.nextafter(r.confidence, 1.0))).recognise(obs).intention == 0
 
 
 def test_posterior_table_equals_pgmpy_exact_inference(thesis):

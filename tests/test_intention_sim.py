@@ -98,10 +98,15 @@ def test_cli_bayes_json_and_model_files(tmp_path):
         assert set(m) == {"mean", "ci95", "per_seed"} and len(m["per_seed"]) == 2
     model = tmp_path / "m.json"
     p = _cli("run", "--intention", "bayes", "--iterations", "300", "--save-intention", str(model), "--quiet")
-    assert p.returncode == 0, p.stderr and model.is_file()
-    assert "accuracy" in p.stdout
-    p = _cli("run", "--intention", "bayes", "--iterations", "300", "--load-intention", str(model), "--json", "--quiet")
     assert p.returncode == 0, p.stderr
+    assert model.is_file() and "accuracy" in p.stdout
+    acc = {}
+    for name, extra in (("fresh", ()), ("loaded", ("--load-intention", str(model)))):
+        p = _cli("run", "--intention", "bayes", "--iterations", "300", *extra, "--json", "--quiet")
+        assert p.returncode == 0, p.stderr
+        acc[name] = json.loads(p.stdout)["intention_accuracy"]["first_500"]["mean"]
+    # the same seed's 300 ticks, recognised by a model that has already learned 300 (0.70) and by a new one (0.44)
+    assert acc["loaded"] > acc["fresh"] + 0.15, acc
 
 
 def test_cli_errors_are_one_line(tmp_path):
@@ -131,3 +136,24 @@ def test_issue_4_acceptance_bayes_against_oracle():
     assert last >= 0.90
     assert last >= first + 0.20
     assert abs(bayes["metrics"]["HSR"]["mean"] - oracle["metrics"]["HSR"]["mean"]) <= 0.05
+
+
+def test_the_intention_bench_times_the_run_it_would_have_run():
+    """``homeo-sim bench --intention bayes``: its timing wrapper leaves the recogniser's learning as it is (the
+    same EM runs as a plain bayes run of as many ticks), and its figures are the ones it prints."""
+    from homeo_msgs_py.graph import BAYES
+    from homeo_sim.intention_bench import bench_intention, format_bench
+
+    r = bench_intention(300, repeats=1)
+    sim = Simulation(load_scenario(), RunConfig(iterations=300, intention=BAYES))
+    sim.run(300)
+    assert r["em_runs"] == sim.recognition.model.em_runs > 0
+    assert r["em_iterations_per_run"] == sim.recognition.model.em_iterations / sim.recognition.model.em_runs
+    assert r["bayes_over_oracle_time"] == r["oracle_iterations_per_s"] / r["bayes_iterations_per_s"]
+    assert all(r[k] > 0 for k in ("recognise_us", "recognise_in_loop_us", "learn_per_tick_us", "em_run_us",
+                                  "pgmpy_query_us"))
+    text = format_bench(r)
+    assert f"({r['em_runs']} EM runs in 300 ticks" in text and f"{r['bayes_over_oracle_time']:.2f}x" in text
+    p = _cli("bench", "--intention", "bayes", "--iterations", "100", "--json")
+    assert p.returncode == 0, p.stderr
+    assert json.loads(p.stdout)["iterations"] == 100

@@ -2,7 +2,7 @@
 
 Every expectation is hand-computed from the thesis (Table 4.6, Section 4.3.1), the shipped
 ``scripts/pepper.json`` (places H (0,0), C (3,0), R (0,3); start at R) and the stand-in's body
-parameters (pepper_bridge.standin.BodyParams).
+parameters (pepper_bridge.standin_body.BodyParams).
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ and actions on the robot.
 
 Hand-computed from the shipped ``scripts/pepper.json`` (places H (0,0), C (3,0), R (0,3); start at
 R; NEng from the battery, NRes from the temperature status, Table 4.6) and the stand-in's body
-parameters (pepper_bridge.standin.BodyParams: a 3 m move drains 0.2 %/s x 10 s + 0.5 %/m x 3 m).
+parameters (pepper_bridge.standin_body.BodyParams: a 3 m move drains 0.2 %/s x 10 s + 0.5 %/m x 3 m).
 """
 
 from __future__ import annotations

@@ -20,7 +20,8 @@ from pepper_bridge.config import ConfigError, config_from_dict, load_config
 from pepper_bridge.mapping import (EMOTION_EVENT, WORD_EVENT, Rejected, WordMap, anger_level, emotion_feedback,
                                    emotion_levels, emotion_scale, max_temperature_status, percent_from_albattery,
                                    percent_from_fraction, plugged, recognized_phrases, relation_from_zones,
-                                   temperature_status, touch_feedback, voice)
+                                   temperature_status, touch_feedback)
+from pepper_bridge.standin_naoqi import voice
 from pepper_bridge.user import angry_voice, calm_voice
 
 # http://doc.aldebaran.com/2-5/naoqi/audio/alvoiceemotionanalysis.html (and 2-8): levels 0..10;

@@ -19,15 +19,9 @@ from homeo_launch.processes import graph_env  # noqa: E402
 pytestmark = [pytest.mark.ros, pytest.mark.qi]
 
 
-# Known intermittent (issue 14), recording at the tap: one full-suite run out of five recorded no
-# homeo/intention message at all while every other topic was whole; not seen since. A hole that can
-# cause it is closed: the robot nodes' writers now wait until they have matched the tap, not only the
-# tap them (tests/test_tap_gate.py). That it was the cause is not proven, so the tap case may still fail
-# without failing the suite (XPASS otherwise). Recording at the writers (the default) has no matching
-# to wait for: each node keeps what it sends, so that case is strict.
-@pytest.mark.parametrize("record_from", [
-    "writers", pytest.param("tap", marks=pytest.mark.xfail(strict=False, reason="intermittent: a full-suite run "
-                                                           "recorded no homeo/intention (cause not proven)"))])
+# Recording at the tap once lost every homeo/intention message in a full-suite run (issue 14); the robot nodes'
+# writers now wait until they have matched the tap (tests/test_tap_gate.py), and both cases are strict.
+@pytest.mark.parametrize("record_from", ["writers", "tap"])
 def test_pepper_run_on_the_standin_is_recorded_whole(tmp_path, record_from):
     from mcap.reader import make_reader
     from mcap_ros2.decoder import DecoderFactory

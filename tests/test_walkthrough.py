@@ -70,6 +70,17 @@ def _wait_for_the_person(env: dict, proc, bound: float = 90.0) -> None:
     raise AssertionError("the graph never waited for the person")
 
 
+def _look_at_tick(tick: int, env: dict, bound: float = 60.0) -> dict:
+    """``_look`` at ``/homeo/last_action`` again until it holds ``tick``'s action (an earlier one is latched
+    until the robot acts): a person who looks late still sees it."""
+    end = time.monotonic() + bound
+    while True:
+        seen = _look("/homeo/last_action", env, must=False)  # None: echo has not yet discovered the topic
+        if (seen is not None and seen["tick"] >= tick) or time.monotonic() > end:
+            assert seen is not None and seen["tick"] == tick, seen
+            return seen
+
+
 def _wait_for_readers(topic: str, count: int, env: dict, bound: float = 60.0) -> None:
     """Until ``ros2 topic info TOPIC`` counts ``count`` subscriptions. Discovery is eventual: the CI once
     read 1 (the daemon had not yet seen the recorder) at the moment the run said it waited for the
@@ -99,14 +110,12 @@ def test_the_play_the_human_walkthrough_with_the_ros2_command_line(tmp_path):
         _wait_for_readers("/homeo/human_input", 2, env)  # the README's -w 2
         # terminal 2: you. A wish starts the tick; after the robot acts, answer it.
         _say('{"intention": "music"}', env)
-        time.sleep(1.0)  # a person reads a second later: the action is latched for them
-        first = _look("/homeo/last_action", env)
-        assert first["tick"] == 0 and first["intention"] == "music" and "action" in first, first
+        first = _look_at_tick(0, env)
+        assert first["intention"] == "music" and "action" in first, first
         wrong = first["action"] != "Play"
         _say('{"feedback": "scold", "proposal": "Play"}' if wrong else '{"feedback": "praise"}', env)
         _say('{"intention": "music"}', env)  # next tick, same wish
-        time.sleep(1.0)
-        second = _look("/homeo/last_action", env)
+        second = _look_at_tick(1, env)  # the latched tick 0 until the robot has acted again
         assert second["tick"] == 1 and second["intention"] == "music", second
         _say('{"feedback": "praise"}', env)
         out, err = robot.communicate(timeout=120)

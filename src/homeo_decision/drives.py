@@ -76,7 +76,6 @@ class DriveModel(DriveDynamics):
     def __init__(self, sc: Scenario):
         super().__init__(sc, "internal")
         self.body_idx = tuple(i for i, d in enumerate(sc.drives) if d.source == "body")
-        self.thresholds = [d.threshold for d in sc.drives]
         self.serving = sc.serving
         self.serving_internal = sc.drives[sc.serving].source == "internal"
         self.praise = sc.praise_change

@@ -224,14 +224,16 @@ def start_robot_first(graph: Graph, mon: Monitor, tap, bound: float) -> None:
         mon.spin(0.1)
 
 
-def drain(mon: Monitor, tap, bound: float = 2.0) -> None:
-    """After the run: take in what is still on its way to the tap (the final messages), until the
-    tap has seen the final run status and a spin brings nothing new; bounded."""
-    end = time.monotonic() + bound
+def drain(mon: Monitor, tap, bound: float = 10.0, quiet: float = 0.5) -> None:
+    """After the run: take in what is still on its way to the tap (the final messages), until the tap has
+    seen the final run status and nothing new for ``quiet`` s, a few of its wakes (it yields the CPU: on a
+    busy machine a 50 ms lull came before a final drives message); bounded."""
+    end, n, since = time.monotonic() + bound, tap.count, time.monotonic()
     while time.monotonic() < end:
-        n = tap.count
         mon.spin(0.05)  # the tap spins in its own thread; this only lets time pass
-        if tap.done and tap.count == n:
+        if tap.count != n:
+            n, since = tap.count, time.monotonic()
+        elif tap.done and time.monotonic() - since >= quiet:
             return
 
 

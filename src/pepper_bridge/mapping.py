@@ -202,19 +202,6 @@ def emotion_feedback(value: Any, threshold: float, scale: int = 10, source: str 
     return -1 if anger_level(value, scale, source) > threshold else 0
 
 
-def voice(scale: int, calm: int = 0, anger: int = 0, joy: int = 0, sorrow: int = 0, laughter: int = 0,
-          excitement: int = 0) -> list:
-    """An EmotionRecognized value in the documented shape (the stand-in's voices); the matched
-    emotion is the highest of calm..sorrow (laughter is never matched; 0 = unknown when all are 0)."""
-    levels = [calm, anger, joy, sorrow, laughter]
-    for v in levels:
-        if not 0 <= v <= scale:
-            raise ValueError(f"level {v} outside 0..{scale}")
-    top = max(levels[:4])
-    index = levels[:4].index(top) + 1 if top > 0 else 0
-    return [[index, top], levels, excitement]
-
-
 def recognized_phrases(value: Any, min_confidence: float, source: str = WORD_EVENT) -> list[str]:
     """Phrases of a WordRecognized value at or above ``min_confidence``, best first."""
     if not isinstance(value, (list, tuple)) or len(value) % 2:

@@ -14,7 +14,7 @@ value cites its page; "2-8" pages say the same as 2-4 and 2-1 for these keys):
   tracked up to ``getMaximumDetectionRange()``, "the default value is 3.5 meters"
   (http://doc.aldebaran.com/2-5/naoqi/peopleperception/alpeopleperception-api.html).
 - Positions are in FRAME_ROBOT, whose "x axis is always forwards" (http://doc.aldebaran.com/2-8/glossary.html);
-  the stand-in's robot keeps its heading along the map's x axis (``mapping.relative_move``).
+  the stand-in's robot keeps its heading along the map's x axis.
 
 The page's diagram of the zones is an image the corpus does not hold: LimitAngle is read here as the
 opening of the front sector (90 degrees: 45 on each side). The stand-in's person only ever stands
@@ -26,7 +26,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .mapping import PEOPLE_KEY, ZONE_KEYS
+from .standin_naoqi import PEOPLE_KEY, ZONE_KEYS
 
 PERSON_ID = 17  # an id as ALPeoplePerception gives one (an integer of the population)
 

@@ -46,7 +46,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from .mapping import EMOTION_EVENT, TOUCH_EVENTS, WORD_EVENT, voice
+from .standin_naoqi import EMOTION_EVENT, RELEASED, TOUCH_EVENTS, TOUCHED, WORD_EVENT, voice
 
 SCHEMA = "homeo-pepper-user"
 VERSION = 1
@@ -138,7 +138,7 @@ class ScriptedUser:
         elif action in self.desired.get(intention, ()):
             row["satisfied"] = True
             if it.get("praise", True):
-                emits += [(TOUCH_EVENTS[1], 1.0), (TOUCH_EVENTS[1], 0.0)]
+                emits += [(TOUCH_EVENTS[1], TOUCHED), (TOUCH_EVENTS[1], RELEASED)]
                 row["feedback"] = 1
             self._next()
         else:
@@ -183,7 +183,7 @@ def timed_entry_emits(entry: Mapping[str, Any], gesture_event: str, movement_eve
     """The events one timed entry raises (presence is handled by the stand-in)."""
     out = []
     if "touch" in entry:
-        out += [(entry["touch"], 1.0), (entry["touch"], 0.0)]
+        out += [(entry["touch"], TOUCHED), (entry["touch"], RELEASED)]
     if "anger" in entry:
         out.append((EMOTION_EVENT, angry_voice(entry["anger"], emotion_scale)))
     if "calm" in entry:

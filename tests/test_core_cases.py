@@ -1,0 +1,472 @@
+"""Small cases of the core computed by hand, written for the mutants ``make mutation`` found alive
+(tools/mutation.py): each assertion fails under one of them (a boundary moved, a term dropped, a check skipped)."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pytest
+
+from homeo_sim.metrics import (AccuracyEnds, MetricRecorder, accuracy_curve, accuracy_ends, cumulative_series,
+                               summarize)
+
+def refused(message: str):
+    """The whole one-line message: a part of it would let a message with anything added pass."""
+    return pytest.raises(ValueError, match=f"^{re.escape(message)}$")
+
+
+# -- metrics (Section 4.1) ---------------------------------------------------------------------------
+# three ticks, two drives with thresholds 0 and 50
+DRIVES = np.array([[10.0, 60.0], [20.0, 95.0], [0.0, 40.0]])
+EXPRESSED = np.array([True, False, True])
+SATISFIED = np.array([True, False, False])
+NAMES, THR = ["A", "B"], [0.0, 50.0]
+
+
+def test_cumulative_series_by_hand():
+    s = cumulative_series(DRIVES, EXPRESSED, SATISFIED, NAMES, THR)
+    # Eq 4.2 after 1, 2, 3 ticks: A 10, 15, 10; B 60, 77.5, 65; all their mean (Eq 4.3)
+    assert s["CDA"]["A"].tolist() == [10.0, 15.0, 10.0] and s["CDA"]["B"].tolist() == [60.0, 77.5, 65.0]
+    assert s["CDA"]["all"].tolist() == [35.0, 46.25, 37.5]
+    # Eq 4.4: excess over the threshold, A 10 20 0, B 10 45 0 (40 < 50 counts 0, not -10)
+    assert s["CEDA"]["A"].tolist() == [10.0, 15.0, 10.0]
+    assert s["CEDA"]["B"].tolist() == pytest.approx([10.0, 27.5, 55.0 / 3])
+    assert s["CEDA"]["all"].tolist() == pytest.approx([10.0, 21.25, (10.0 + 55.0 / 3) / 2])
+    # Eq 4.1 over the ticks with an intention: 1/1, 1/1, 1/2; Eq 4.6-4.7: tick 2 insecure (95 >= 90)
+    assert s["HSR"].tolist() == [1.0, 1.0, 0.5]
+    assert s["RSR"].tolist() == pytest.approx([1.0, 0.5, 2.0 / 3])
+    assert s["drives"]["B"].tolist() == [60.0, 95.0, 40.0]
+    assert s["expressed"] is EXPRESSED and s["satisfied"] is SATISFIED
+    later = cumulative_series(DRIVES, ~EXPRESSED, SATISFIED & False, NAMES, THR)  # no intention until tick 2
+    assert math.isnan(later["HSR"][0]) and later["HSR"][1:].tolist() == [0.0, 0.0]
+
+
+def _flat(d: dict) -> dict:
+    return {f"{k}.{j}": w for k, v in d.items() for j, w in (v.items() if isinstance(v, dict) else [("", v)])}
+
+
+def test_summary_by_hand_and_the_recorder_agrees():
+    want = {"HSR": 0.5, "RSR": 2.0 / 3, "CDA": {"A": 10.0, "B": 65.0, "all": 37.5},
+            "CEDA": {"A": 10.0, "B": 55.0 / 3, "all": (10.0 + 55.0 / 3) / 2}, "intentions": 2}
+    assert _flat(summarize(DRIVES, EXPRESSED, SATISFIED, NAMES, THR)) == pytest.approx(_flat(want))
+    rec = MetricRecorder(NAMES, THR, keep=True)
+    for d, e, s in zip(DRIVES.tolist(), EXPRESSED, SATISFIED):
+        rec.record(d, e, s)
+    assert rec.n == 3 and _flat(rec.summary()) == pytest.approx(_flat(want))
+    d, e, s = rec.arrays()
+    assert d.tolist() == DRIVES.tolist() and e.tolist() == EXPRESSED.tolist() and s.tolist() == SATISFIED.tolist()
+    assert rec.series()["CDA"]["all"].tolist() == [35.0, 46.25, 37.5]
+    assert rec.series()["CEDA"]["B"].tolist() == pytest.approx([10.0, 27.5, 55.0 / 3])  # its thresholds
+
+
+def test_the_boundaries_of_secure_and_of_excess():
+    rec = MetricRecorder(NAMES, THR)
+    rec.record([90.0, 50.0], False, False)  # 90 is not secure (Eq 4.7: every drive < 90); 50 is no excess
+    rec.record([89.5, 49.0], True, True)
+    out = rec.summary()
+    assert out["RSR"] == 0.5 and out["CEDA"]["B"] == 0.0 and out["CEDA"]["A"] == pytest.approx(89.75)
+    assert out["HSR"] == 1.0 and out["intentions"] == 1
+    assert math.isnan(summarize(DRIVES[:1], np.array([False]), np.array([False]), NAMES, THR)["HSR"])
+    empty = MetricRecorder(NAMES, THR)
+    with refused("no iterations recorded"):
+        empty.summary()
+    with refused("no iterations recorded"):
+        summarize(DRIVES[:0], EXPRESSED[:0], SATISFIED[:0], NAMES, THR)
+    with refused("this recorder keeps no per-tick history (MetricRecorder(keep=True))"):
+        empty.arrays()
+    rec = MetricRecorder(NAMES, THR, keep=True)
+    rec.record([50, 50], 0, 0)  # integers, as a caller may give them: the arrays are numbers and truths
+    rec.record([50.5, 49.0], 1, 1)  # 0.5 above the threshold counts 0.5 (Eq 4.4)
+    d, e, s = rec.arrays()
+    assert (d.dtype, e.dtype, s.dtype) == (np.float64, np.bool_, np.bool_) and d.shape == (2, 2)
+    assert rec.summary()["CEDA"]["A"] == 50.25 and rec.summary()["CEDA"]["B"] == 0.0
+    silent = MetricRecorder(NAMES, THR)
+    silent.record([1.0, 1.0], False, False)
+    assert math.isnan(silent.summary()["HSR"]) and silent.summary()["RSR"] == 1.0  # no intention: HSR undefined
+
+
+GOOD = {"n": 3, "intentions": 2, "satisfied": 1, "secure": 2, "sum": [30.0, 195.0], "excess": [30.0, 55.0]}
+
+
+COUNTS, SUMS = "metric counts must be integers >= 0", "metric sum must be 2 finite numbers >= 0"
+
+
+@pytest.mark.parametrize("bad,words", [
+    ("x", "not a metrics state"),
+    (dict(GOOD, n=-1), COUNTS), (dict(GOOD, n=3.0), COUNTS), (dict(GOOD, secure=True), COUNTS),
+    (dict(GOOD, intentions=4), "inconsistent metric counts [3, 4, 1, 2]"),
+    (dict(GOOD, satisfied=3), "inconsistent metric counts [3, 2, 3, 2]"),
+    (dict(GOOD, secure=4), "inconsistent metric counts [3, 2, 1, 4]"),
+    (dict(GOOD, sum=[1.0]), SUMS), (dict(GOOD, sum=[1.0, -1.0]), SUMS), (dict(GOOD, sum=[1.0, float("nan")]), SUMS),
+    (dict(GOOD, sum=[1.0, "2"]), SUMS), (dict(GOOD, excess=None), "metric excess must be 2 finite numbers >= 0"),
+    (dict(GOOD, excess=[0.0, float("inf")]), "metric excess must be 2 finite numbers >= 0"),
+])
+def test_a_metrics_state_is_refused_whole(bad, words):
+    rec = MetricRecorder(NAMES, THR)
+    rec.record([1.0, 2.0], True, False)
+    before = rec.state()
+    with refused(words):
+        rec.set_state(bad)
+    assert rec.state() == before  # nothing changed
+
+
+def test_a_metrics_state_at_its_bounds_is_taken():
+    rec = MetricRecorder(NAMES, THR)
+    zero = {"n": 0, "intentions": 0, "satisfied": 0, "secure": 0, "sum": [0.0, 0], "excess": [0, 0.0]}
+    rec.set_state(zero)  # nothing recorded yet: zeros, integer or not
+    assert rec.state() == dict(zero, sum=[0.0, 0.0], excess=[0.0, 0.0]) and rec.n == 0
+    full = {"n": 2, "intentions": 2, "satisfied": 2, "secure": 2, "sum": [0.5, 3], "excess": [0.5, 0.25]}
+    rec.set_state(full)  # every tick with an intention, each satisfied, each secure
+    assert rec.summary()["HSR"] == 1.0 and rec.summary()["RSR"] == 1.0 and rec.summary()["CDA"]["A"] == 0.25
+
+
+def test_a_metrics_state_goes_on_as_the_uninterrupted_run():
+    whole, first = MetricRecorder(NAMES, THR), MetricRecorder(NAMES, THR)
+    for d, e, s in zip(DRIVES.tolist()[:2], EXPRESSED, SATISFIED):
+        whole.record(d, e, s)
+        first.record(d, e, s)
+    st = first.state()
+    assert st == {"n": 2, "intentions": 1, "satisfied": 1, "secure": 1, "sum": [30.0, 155.0], "excess": [30.0, 55.0]}
+    later = MetricRecorder(NAMES, THR)
+    later.set_state(st)
+    for rec in (whole, later):
+        rec.record(DRIVES[2].tolist(), True, False)
+    assert later.state() == whole.state() == GOOD
+    assert later.summary() == whole.summary()
+    with refused("a recorder that keeps every tick cannot take a running-sums state"):
+        MetricRecorder(NAMES, THR, keep=True).set_state(GOOD)
+
+
+def test_the_recorder_follows_the_robot_tick_by_tick(thesis):
+    """``follow`` and ``on_tick`` as the runner uses them: d(t) after each tick, the human's truth from the outcome."""
+    from homeo_decision.agent import DecisionCore
+    from homeo_decision.robot import OracleRecognition, Robot, run_loop
+    from homeo_sim.environment import SimEnvironment
+
+    robot = Robot(thesis, DecisionCore(thesis, 2), OracleRecognition(thesis))
+    rec = MetricRecorder(thesis.drive_names, [d.threshold for d in thesis.drives], keep=True).follow(robot.perception)
+    seen = []
+
+    def hook(t, p, r, a, out):
+        rec.on_tick(t, p, r, a, out)
+        seen.append((list(robot.perception.drives), out.true_intention != 0, out.satisfied))
+
+    run_loop(SimEnvironment(thesis, 2), robot, 200, on_tick=hook)
+    d, e, s = rec.arrays()
+    assert d.tolist() == [x[0] for x in seen] and e.tolist() == [x[1] for x in seen] and s.tolist() == [x[2] for x in seen]
+    assert 0 < e.sum() < 200 and 0 < s.sum() < e.sum()  # both kinds of tick, both kinds of answer
+
+
+def test_accuracy_at_both_ends_and_per_window():
+    hits = [True, False, True, True, False]
+    assert accuracy_ends(hits, 2) == {"first_2": 0.5, "last_2": 0.5}
+    assert accuracy_ends(hits[:4], 2) == {"first_2": 0.5, "last_2": 1.0}
+    assert accuracy_ends(hits, 10) == {"first_10": 0.6, "last_10": 0.6}  # a shorter run: the whole of it
+    assert accuracy_ends(hits) == {"first_500": 0.6, "last_500": 0.6}  # the window of docs/INTENTION.md: 500
+    with refused("no iterations recorded"):
+        accuracy_ends([])
+    assert accuracy_curve(hits, 2) == [0.5, 1.0]  # the fifth tick's window of one is dropped
+    assert accuracy_curve(hits, 5) == [0.6] and accuracy_curve(hits, 6) == []
+    assert accuracy_curve(hits * 50) == [0.6]  # 250 ticks a window by default
+    ends = AccuracyEnds(2)
+    with refused("no iterations recorded"):
+        ends.ends()
+    ends.append(True)
+    assert len(ends) == 1 and ends.ends() == {"first_2": 1.0, "last_2": 1.0}
+    for h in (False, False):
+        ends.append(h)
+    assert len(ends) == 2 and ends.ends() == {"first_2": 0.5, "last_2": 0.0}
+    assert ends.state() == {"window": 2, "first": "10", "last": "00"}
+    again = AccuracyEnds(2)
+    again.set_state(ends.state())
+    again.append(True)
+    assert again.state() == {"window": 2, "first": "10", "last": "01"} and again.ends() == {"first_2": 0.5, "last_2": 0.5}
+    again.set_state({"window": 2, "first": "1", "last": "11"})
+    assert again.ends() == {"first_2": 1.0, "last_2": 1.0}
+
+
+HITS = "accuracy hits must be strings of 0 and 1, at most 2 long"
+
+
+@pytest.mark.parametrize("bad,words", [
+    ([], "not an accuracy state of window 2"), ({"window": 3, "first": "", "last": ""}, "not an accuracy state of window 2"),
+    ({"window": 2, "first": 1, "last": "1"}, HITS), ({"window": 2, "first": "1", "last": "012"}, HITS),
+    ({"window": 2, "first": "1", "last": "1x"}, HITS), ({"window": 2, "first": "X", "last": "1X"}, HITS),
+    ({"window": 2, "first": "11", "last": "1"}, "accuracy hits: fewer last than first"),
+])
+def test_an_accuracy_state_is_refused_whole(bad, words):
+    ends = AccuracyEnds(2)
+    ends.append(True)
+    with refused(words):
+        ends.set_state(bad)
+    assert ends.state() == {"window": 2, "first": "1", "last": "1"}
+
+
+# -- the decision core (Algorithm 1's parameters, Table 4.4's schedule) ---------------------------------
+def test_the_schedule_goes_on_from_the_tick_offset(thesis):
+    from homeo_decision.agent import DecisionCore
+
+    core = DecisionCore(thesis, 0)
+    first, later = core.schedule  # Table 4.4: alpha 0.3, tau 4 for the first 1000 iterations, then 0.1 and 2
+    assert (first.start, first.alpha, first.tau, later.start, later.alpha, later.tau) == (0, 0.3, 4.0, 1000, 0.1, 2.0)
+    assert core.phase(5) is first and core.phase(999) is first and core.phase(1000) is later
+    core.set_tick_offset(995)  # a robot that had learned 995 ticks: its tick 5 is the schedule's 1000
+    assert core.tick_offset == 995 and core.phase(4) is first and core.phase(5) is later
+    core.set_tick_offset(0)  # the phase cached for tick 5 was the later one: forgotten
+    assert core.tick_offset == 0 and core.phase(0) is first and core.phase(1) is first and core.phase(5) is first
+    with pytest.raises(ValueError, match="tick offset must be >= 0, got -1"):
+        core.set_tick_offset(-1)
+    assert core.tick_offset == 0
+
+
+def test_the_parameters_in_force_by_name(thesis):
+    from homeo_decision.agent import DecisionCore
+
+    core = DecisionCore(thesis, 0, dod=0.4, xi=2.0)
+    # the scenario's gamma 0.5 (Table 4.4) and the two switches on; dod and xi as given
+    assert list(core.params().items()) == [("dod", 0.4), ("xi", 2.0), ("gamma", 0.5), ("feedback", True),
+                                           ("pseudo_update", True)]
+
+
+def test_reset_forgets_the_table_and_starts_the_stream_again(thesis):
+    from homeo_decision.agent import DecisionCore
+    from homeo_decision.rng import UniformStream
+
+    core = DecisionCore(thesis, 3)
+    drawn = [core.rng.random() for _ in range(3)]
+    assert drawn[0] == UniformStream(3, "decision").random()  # the stream of the seed, named for its component
+    core.q.q[0][0][0] = 99.0
+    core.reset()
+    assert core.q.q[0][0][0] == thesis.open.initial_q and core.seed == 3
+    assert [core.rng.random() for _ in range(3)] == drawn
+    core.reset(7)
+    seven = UniformStream(7, "decision")
+    assert core.seed == 7 and [core.rng.random() for _ in range(3)] == [seven.random() for _ in range(3)]
+
+
+# -- the simulated human's checkpoint (homeo_sim.human) -----------------------------------------------------
+def _human(thesis, seed=5, ticks=7):
+    from homeo_sim.human import SimHuman
+
+    h = SimHuman(thesis, seed)
+    for t in range(ticks):
+        h.advance(0)
+        h.respond(t % 5)
+        h.observe()
+    return h
+
+
+def test_a_human_state_goes_on_with_the_same_draws(thesis):
+    from homeo_sim.human import SimHuman
+
+    h = _human(thesis)
+    st = h.state()
+    assert set(st) == {"seed", "intention", "present", "satisfied", "rng", "obs_rng"} and st["seed"] == 5
+    other = SimHuman(thesis, 0)
+    other.set_state(st)
+    assert other.state() == st
+    for t in range(20):
+        for x in (h, other):
+            x.advance(0)
+        assert (h.intention, h.present) == (other.intention, other.present)
+        assert h.respond(t % 5) == other.respond(t % 5) and h.observe() == other.observe()
+    h.reset()  # the same seed, a fresh start (Algorithm 2 line 1: no intention)
+    assert (h.seed, h.intention, h.present, h.satisfied) == (5, 0, True, False)
+    assert h.state()["rng"] == SimHuman(thesis, 5).state()["rng"]
+    h.reset(9)
+    assert h.seed == 9 and h.state()["obs_rng"] == SimHuman(thesis, 9).state()["obs_rng"]
+
+
+SEED, IT, BOOLS = ("human seed must be an integer in 0..2^31-1, got {}",
+                    "human intention must be an index of the scenario's intentions, got {}",
+                    "human present and satisfied must be true or false")
+
+
+@pytest.mark.parametrize("change,words", [
+    (None, "not a human state"),
+    ({"seed": -1}, SEED.format(-1)), ({"seed": 2**31}, SEED.format(2**31)), ({"seed": True}, SEED.format(True)),
+    ({"seed": 5.0}, SEED.format(5.0)), ({"intention": -1}, IT.format(-1)), ({"intention": 7}, IT.format(7)),
+    ({"intention": False}, IT.format(False)), ({"present": 1}, BOOLS), ({"satisfied": "no"}, BOOLS),
+    ({"rng": None}, "human stream: not a random-stream state"),
+    ({"rng": {"block": 0, "drawn": 1.0}}, "human stream: not a random-stream state"),
+    ({"obs_rng": {"block": "0", "drawn": 0}}, "observation stream: not a random-stream state"),
+    ({"rng": {"block": 0, "drawn": -1}}, "human stream: not a random-stream state (block 0, drawn -1)"),
+])
+def test_a_human_state_is_refused_whole(thesis, change, words):
+    h = _human(thesis)
+    before = h.state()
+    with refused(words):
+        h.set_state("x" if change is None else dict(before, **change))
+    assert h.state() == before
+
+
+def test_a_human_state_at_its_bounds_is_taken(thesis):
+    h = _human(thesis)
+    h.set_state(dict(h.state(), seed=0, intention=0))  # the lowest seed and no intention
+    assert (h.seed, h.intention) == (0, 0)
+    st = dict(h.state(), seed=2**31 - 1, intention=len(thesis.intention_names) - 1, present=False, satisfied=True)
+    st["rng"] = dict(st["rng"])  # a stream state is the seed's: it goes on under the new seed's generator
+    h.set_state(st)
+    assert (h.seed, h.intention, h.present, h.satisfied) == (2**31 - 1, 6, False, True)
+
+
+def test_the_human_reveals_by_its_scenario_s_rule(toy_raw):
+    from homeo_decision.scenario import scenario_from_dict
+    from homeo_sim.human import SimHuman
+
+    raw = toy_raw()
+    raw["open"]["intention_reveal"] = "feedback"
+    sc = scenario_from_dict(raw)
+    h = SimHuman(sc)
+    assert h.seed == 0 and h.reveal == "feedback"  # the default seed; the open choice as the scenario says
+    h.intention = sc.intention_names.index("on")
+    assert h.respond(sc.action_index("TurnOn")).clarified == h.intention  # praise reveals the intention
+
+
+def test_the_human_answers_as_algorithm_2_says(thesis):
+    """Lines 8-19 with each reveal rule (the open choice intention_reveal) and a proposal always / never made."""
+    from homeo_decision.environment import Outcome
+    from homeo_sim.human import SimHuman
+
+    h = SimHuman(thesis, 0)
+    light, on, play = thesis.intention_names.index("light"), thesis.action_index("LightOn"), thesis.action_index("Play")
+    assert h.respond(play) == Outcome(play, 0, None, None, None, 0, False)  # no intention: no answer
+    h.intention, h.reveal = light, "feedback"
+    assert h.respond(on) == Outcome(on, 1, None, light, None, light, True) and h.satisfied  # praise reveals it
+    h.satisfied, h.reveal, h.p_propose = False, "proposal", 1.0
+    assert h.respond(on) == Outcome(on, 1, None, None, None, light, True)  # praise alone does not
+    assert h.respond(play) == Outcome(play, -1, on, light, None, light, False)  # a scolding with the proposal does
+    h.reveal = "never"
+    assert h.respond(play) == Outcome(play, -1, on, None, None, light, False)
+    h.reveal, h.p_propose = "proposal", 0.0
+    assert h.respond(play) == Outcome(play, -1, None, None, None, light, False)  # no proposal: nothing revealed
+
+
+def test_the_proposal_names_the_rule_s_desired_action(thesis):
+    from homeo_sim.human import SimHuman
+
+    h = SimHuman(thesis, 0)
+    leave, light = thesis.intention_names.index("leave"), thesis.intention_names.index("light")
+    to_r, to_c = thesis.action_index("MoveToR"), thesis.action_index("MoveToC")
+    h.p_propose = 1.0
+    h.proposal_choice = "first"
+    assert h.proposal(leave) == to_r and h.proposal(light) == thesis.action_index("LightOn")
+    h.proposal_choice = "MoveToC"
+    assert h.proposal(leave) == to_c
+    h.proposal_choice = "Play"  # not one of leave's desired actions: the first
+    assert h.proposal(leave) == to_r
+    h.proposal_choice = "random"
+    assert {h.proposal(leave) for _ in range(40)} == {to_r, to_c}
+    h.p_propose = 0.0
+    assert h.proposal(leave) is None
+
+
+def test_the_human_is_observed_by_its_habits(thesis):
+    """Each channel drawn from the intention's habit row (its inverse CDF), or uniformly with the channel's noise."""
+    from homeo_sim.human import SimHuman
+
+    h, n = SimHuman(thesis, 4), 4000
+    spec = thesis.observations
+    for name in ("light", "leave", "none"):
+        h.intention = thesis.intention_names.index(name)
+        draws = [h.observe() for _ in range(n)]
+        for ch in ("gesture", "movement", "keyword"):
+            row = spec.habits[ch][h.intention]
+            got = [sum(d[ch] == sym for d in draws) / n for sym in spec.alphabets[ch]]
+            assert got == pytest.approx(row, abs=0.03), (name, ch)
+    assert h.observe(with_intention=True)["intention"] == "none"
+    ch, symbols, _, cum = h._habits[0]  # the gesture channel, all noise now
+    h._habits = ((ch, symbols, 1.0, cum), *h._habits[1:])
+    gestures = [h.observe()["gesture"] for _ in range(n)]
+    assert [gestures.count(s) / n for s in symbols] == pytest.approx([1 / len(symbols)] * len(symbols), abs=0.03)
+
+
+def test_perception_breaks_a_tie_by_the_scenario_s_rule(toy_raw, enc):
+    """Eq 3.3 with equal intensities: the open choice tie_break ('first' in the toy, 'last' declared)."""
+    from homeo_decision.agent import DecisionCore
+    from homeo_decision.scenario import scenario_from_dict
+
+    for rule, m_dom in (("first", 0), ("last", 1)):
+        raw = toy_raw()
+        raw["open"]["tie_break"] = rule
+        sc = scenario_from_dict(raw)
+        core = DecisionCore(sc, 0)
+        code = enc(sc, "H")  # no intention: no stimulus; NAch 60 (threshold 0) and NEng 60 (threshold 50)
+        p = core.perceive([60.0, 60.0], code)
+        assert (p.intensities, p.m_dom) == ([60.0, 60.0], m_dom), rule
+        q = core.percept(code, (60.0, 60.0), [60.0, 60.0], m_dom)
+        assert (q.intensities, q.m_dom, q.states) == (p.intensities, p.m_dom, p.states)
+        from homeo_decision.baselines import FlatQ  # a baseline perceives through the shared Perceiving
+
+        f = FlatQ(sc).percept(code, (60.0, 60.0), [60.0, 60.0], m_dom)
+        assert (f.intensities, f.m_dom) == ([60.0, 60.0], m_dom)
+
+
+def test_the_parameters_given_win_over_the_scenario_s(thesis):
+    from homeo_decision.agent import DecisionCore
+
+    core = DecisionCore(thesis, 0, gamma=0.9, pseudo_update=False, feedback=False, feedback_value=0.0)
+    assert (core.gamma, core.pseudo_update, core.feedback, core.f) == (0.9, False, False, 0.0)  # f = 0 is allowed
+    assert DecisionCore(thesis, 0).f == 10.0  # Table 4.4's f
+    with refused("feedback value must be >= 0, got -1"):
+        core.set_params(feedback_value=-1)
+    assert core.f == 0.0
+
+
+# -- drives (Tables 4.1-4.2, Definition 1: every drive in [0, 100]) ---------------------------------------------
+def test_drives_are_clamped_at_both_ends_and_nowhere_else(toy_raw, enc):
+    from homeo_decision.drives import DriveDynamics, DriveModel
+    from homeo_decision.scenario import scenario_from_dict
+
+    raw = toy_raw()
+    raw["drives"][1]["rate"] = 0.5  # NEng (body) grows 0.5 a tick
+    raw["actions"][3]["effects"] = [{"set": {"robot.location": "B"}, "drives": {"NEng": -0.5}}]  # GoB lowers it
+    sc = scenario_from_dict(raw)
+    body = DriveDynamics(sc, "body")
+    go_b = sc.action_index("GoB")
+    for start, after_time, after_action in ((99.75, 100.0, 99.5), (100.0, 100.0, 99.5), (0.25, 0.75, 0.25),
+                                            (0.0, 0.5, 0.0), (99.6, 100.0, 99.5)):
+        body.values[1] = start
+        body.apply_time()
+        assert body.values[1] == after_time, start  # 100.25 -> 100, nothing else moved
+        body.values[1] = after_time
+        body.apply_action(enc(sc, "H"), go_b)
+        assert body.values[1] == after_action, start
+    body.values[1] = 0.25
+    body.apply_action(enc(sc, "H"), go_b)
+    assert body.values[1] == 0.0  # -0.25 -> 0
+    m = DriveModel(sc)
+    assert m.values == [float(v) for v in sc.open.initial_drives]  # the body drive too, before any reading
+    for given, kept in (([5.0, -3.0], 0.0), ([5.0, 0.5], 0.5), ([5.0, 100.5], 100.0), ([5.0, 99.5], 99.5), ([5.0, 100], 100.0)):
+        m.set_body(given)
+        assert m.values[1] == kept and m.values[0] == sc.open.initial_drives[0]  # the internal drive is its own
+
+
+def test_feedback_moves_the_serving_drive_only_when_given(toy_raw):
+    from homeo_decision.drives import DriveModel
+    from homeo_decision.scenario import scenario_from_dict
+
+    raw = toy_raw()
+    raw["open"]["scold_drive_change"] = 5.0
+    raw["open"]["initial_drives"] = {"NAch": 50.0, "NEng": 0.0}
+    m = DriveModel(scenario_from_dict(raw))
+    m.apply_feedback(0)
+    assert m.values[0] == 50.0  # no answer: nothing
+    m.apply_feedback(-1)
+    assert m.values[0] == 55.0  # a scolding: the open choice's +5
+    m.apply_feedback(1)
+    assert m.values[0] == 45.0  # praise: -10 (Section 4.2.1)
+    m.apply_time()  # the defaults: an intention expressed, not satisfied; serving_growth always: +3 and +2
+    assert m.values == [48.0, 0.0]  # the body drive is the body's: it does not grow here
+
+
+def test_a_drive_growing_always_is_never_still(toy_raw, enc):
+    from homeo_decision.drives import DriveDynamics
+    from homeo_decision.scenario import scenario_from_dict
+
+    raw = toy_raw()
+    raw["open"]["drive_growth"] = {"NEng": "always"}
+    sc = scenario_from_dict(raw)
+    assert DriveDynamics(sc, "body").still(enc(sc, "H"), sc.action_index("GoB")) == ()
