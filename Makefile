@@ -10,7 +10,7 @@ PY     := $(shell $(PYTHON) -c 'import sys; print(sys.executable)' 2>/dev/null |
 # the real ros2 command line and launch system (wheels of their Jazzy sources), for the workspace tests
 ROS2_TOOLS ?= $(firstword $(wildcard ../shared/ros2-tools /work/shared/ros2-tools))
 
-.PHONY: setup run test test-core test-py312 ros2-tools bench report calibrate-setup profile-setup clean
+.PHONY: setup run test test-core test-py312 ros2-tools bench report calibrate-setup profile-setup cluster-setup clean
 
 setup: $(STAMP)
 
@@ -29,7 +29,7 @@ run: setup
 # its own ROS domains and data directory (tests/rosgraph.py, tests/conftest.py)
 WORKERS ?= 2
 
-test: setup ros2-tools profile-setup calibrate-setup
+test: setup ros2-tools profile-setup calibrate-setup cluster-setup
 	$(BIN)/python -m pytest -q -n $(WORKERS)
 
 # the core, the graph's equivalence with the in-process runner, and the launch tests (ros2 launch in a
@@ -65,6 +65,10 @@ calibrate-setup: setup
 # the profiler of `homeo-launch bench --profile` (a tool dependency: py-spy; its test runs with `make test`)
 profile-setup: setup
 	$(BIN)/pip install --disable-pip-version-check -q --no-deps -r tools/requirements-profile.lock
+
+# the cluster extra (--cluster ADDRESS: Ray); `make test` installs it so that the cluster tests run
+cluster-setup: setup
+	$(BIN)/pip install --disable-pip-version-check -q --no-deps -r tools/requirements-cluster.lock
 
 clean:
 	rm -rf $(VENV) .venv312 build install log src/*.egg-info

@@ -205,10 +205,10 @@ def _run_one(cfg: RunConfig) -> EpisodeResult:
     return run_episode(cfg, cached_scenario(cfg))
 
 
-def run_seeds(cfg: RunConfig, seeds: Iterable[int], workers: int | None = None,
-              on_done: Callable[[EpisodeResult], None] | None = None) -> list[EpisodeResult]:
-    """Run one episode per seed, on ``workers`` processes; results come back in seed order."""
+def run_seeds(cfg: RunConfig, seeds: Iterable[int], workers=None, bar=None) -> list[EpisodeResult]:
+    """Run one episode per seed, on ``workers`` processes (or a ``parallel.Pool``); results come back in
+    seed order; ``bar`` counts them."""
     from .parallel import parallel_map
 
     cfgs = [replace(cfg, seed=s, trace=None, save_q=None, save_intention=None) for s in seeds]
-    return parallel_map(_run_one, cfgs, workers, on_done)
+    return parallel_map(_run_one, cfgs, workers, bar)

@@ -1,0 +1,151 @@
+"""A study's runs as Ray tasks on a cluster (``--cluster ADDRESS``; Ray is the ``cluster`` extra).
+
+Each run is one task; a task whose node dies is run again elsewhere (Ray's retries), and since a run is
+seeded by its own arguments it gives the same result wherever and whenever it runs. A node whose code
+differs from the driver's (``parallel.code_digest``) is refused: its numbers could differ. Nothing here
+imports Ray before a study asks for a cluster.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import socket
+import threading
+import time
+from collections import deque
+
+from homeo_msgs_py.cli_args import UserError
+
+from .parallel import code_digest
+
+INSTALL = "pip install '.[cluster]' (in a checkout: make cluster-setup)"
+CONNECT_WAIT = 15.0  # s: how long an address may take to answer as a Ray cluster
+RETRIES = 3  # a task lost with its node is run again this many times
+NODES_WINDOW = 10.0  # s: a node is in use if it finished a run this recently
+
+
+class ClusterError(UserError):
+    """The cluster cannot be reached or cannot run the study (``str()``: one line)."""
+
+
+_HOST = r"(?:[A-Za-z0-9](?:[A-Za-z0-9.-]{0,251}[A-Za-z0-9])?|\[[0-9A-Fa-f:.]{2,45}\])"
+
+
+def address(s: str) -> str:
+    """``auto``, ``HOST:PORT`` or ``ray://HOST:PORT`` (argparse type)."""
+    m = re.fullmatch(rf"(ray://)?({_HOST}):(\d{{1,5}})", s)
+    if s != "auto" and not (m and 1 <= int(m[3]) <= 65535):
+        raise argparse.ArgumentTypeError(f"{s[:60]!r} is not auto, HOST:PORT or ray://HOST:PORT")
+    return s
+
+
+def _ray():
+    # on these machines a 127.0.0.1 cluster must stay on 127.0.0.1 (else Ray swaps in the interface address)
+    os.environ.setdefault("RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER", "0")
+    os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
+    try:
+        import ray
+    except ImportError:
+        raise ClusterError(f"--cluster needs Ray: {INSTALL}") from None
+    return ray
+
+
+def _probe(ray, addr: str) -> None:
+    """A bounded wait for ``addr`` to answer (Ray's own connect retries for minutes)."""
+    host, _, port = addr.removeprefix("ray://").rpartition(":")
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), timeout=CONNECT_WAIT).close()
+    except OSError as exc:
+        raise ClusterError(f"cannot reach the Ray cluster at {addr}: {exc.strerror or exc}") from None
+    if addr.startswith("ray://"):
+        return  # Ray client: its own connect gives up on its own
+    answer: list = []
+
+    def ask():
+        try:
+            answer.append(ray._raylet.GcsClient(address=addr).internal_kv_get(b"session_name", b"session", timeout=5))
+        except Exception as exc:  # noqa: BLE001 (any failure means: not a cluster we can use)
+            answer.append(exc)
+
+    t = threading.Thread(target=ask, daemon=True)
+    t.start()
+    t.join(CONNECT_WAIT)
+    if not answer or isinstance(answer[0], Exception):
+        raise ClusterError(f"{addr} does not answer as a Ray cluster within {CONNECT_WAIT:g} s")
+
+
+def connect(addr: str):
+    """Ray, connected to the cluster at ``addr`` (once per process)."""
+    ray = _ray()
+    if not ray.is_initialized():
+        if addr == "auto":
+            try:
+                addr = ray._private.services.canonicalize_bootstrap_address_or_die("auto")
+            except ConnectionError:
+                raise ClusterError("--cluster auto: no running Ray cluster on this machine "
+                                   "(ray start --head, or give HOST:PORT)") from None
+        _probe(ray, addr)
+        import logging
+
+        try:
+            ray.init(address=addr, logging_level=logging.ERROR, log_to_driver=False)
+        except (ConnectionError, RuntimeError, ValueError) as exc:
+            raise ClusterError(f"cannot join the Ray cluster at {addr}: {str(exc).splitlines()[0][:160]}") from None
+    return ray
+
+
+def cpus(addr: str) -> int:
+    return int(connect(addr).cluster_resources().get("CPU", 0))
+
+
+def _on_node(fn, a):
+    import ray
+
+    return ray.get_runtime_context().get_node_id(), code_digest(), fn(a)
+
+
+_TASK: list = []
+
+
+def run_tasks(addr: str, fn, todo: list, done, interrupted: list) -> None:
+    """``done(i, fn(a), note)`` for each ``(i, a)`` of ``todo`` run as a task; Ctrl-C cancels the rest."""
+    ray = connect(addr)
+    if not _TASK:
+        _TASK.append(ray.remote(max_retries=RETRIES)(_on_node))
+    refs = {_TASK[0].remote(fn, a): i for i, a in todo}
+    pending, recent = list(refs), deque()
+    try:
+        while pending:
+            if interrupted:
+                raise KeyboardInterrupt
+            ready, pending = ray.wait(pending, num_returns=min(len(pending), 64), timeout=0.2)
+            for ref in ready:
+                try:
+                    node, code, r = ray.get(ref)
+                except ray.exceptions.RayTaskError as exc:  # the run's own error, as it would be locally
+                    raise exc.as_instanceof_cause() from None
+                except ray.exceptions.RayError as exc:
+                    raise ClusterError(f"a run failed on the cluster after {RETRIES} retries: "
+                                       f"{type(exc).__name__}: {str(exc).splitlines()[0][:120]}") from None
+                if code != code_digest():
+                    raise ClusterError(f"node {node[:8]} runs other code than this one ({code} vs {code_digest()}): "
+                                       "install the same homeo-robot on every node")
+                now = time.monotonic()
+                recent.append((now, node))
+                while recent[0][0] < now - NODES_WINDOW:
+                    recent.popleft()
+                n = len({nd for _, nd in recent})
+                done(refs[ref], r, f"{n} node{'s' if n > 1 else ''}")
+    except BaseException:
+        for ref in pending:
+            try:
+                ray.cancel(ref, force=True)
+            except Exception:  # noqa: BLE001 (finished meanwhile)
+                pass
+        if pending:
+            import sys
+
+            print(f"cancelled the study's {len(pending)} unfinished tasks on the cluster", file=sys.stderr)
+        raise
