@@ -12,7 +12,8 @@ import argparse
 import os
 import re
 import socket
-import threading
+import subprocess
+import sys
 import time
 from collections import deque
 
@@ -52,7 +53,7 @@ def _ray():
     return ray
 
 
-def _probe(ray, addr: str) -> None:
+def _probe(addr: str) -> None:
     """A bounded wait for ``addr`` to answer (Ray's own connect retries for minutes)."""
     host, _, port = addr.removeprefix("ray://").rpartition(":")
     try:
@@ -61,18 +62,14 @@ def _probe(ray, addr: str) -> None:
         raise ClusterError(f"cannot reach the Ray cluster at {addr}: {exc.strerror or exc}") from None
     if addr.startswith("ray://"):
         return  # Ray client: its own connect gives up on its own
-    answer: list = []
-
-    def ask():
-        try:
-            answer.append(ray._raylet.GcsClient(address=addr).internal_kv_get(b"session_name", b"session", timeout=5))
-        except Exception as exc:  # noqa: BLE001 (any failure means: not a cluster we can use)
-            answer.append(exc)
-
-    t = threading.Thread(target=ask, daemon=True)
-    t.start()
-    t.join(CONNECT_WAIT)
-    if not answer or isinstance(answer[0], Exception):
+    # asked from a process of its own: one that cannot be stopped otherwise, and whose retries print warnings
+    ask = f"import ray._raylet as r; r.GcsClient(address={addr!r}).internal_kv_get(b'session_name', b'session', timeout=5)"
+    try:
+        ok = subprocess.run([sys.executable, "-c", ask], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            timeout=CONNECT_WAIT).returncode == 0
+    except subprocess.TimeoutExpired:
+        ok = False
+    if not ok:
         raise ClusterError(f"{addr} does not answer as a Ray cluster within {CONNECT_WAIT:g} s")
 
 
@@ -86,9 +83,14 @@ def connect(addr: str):
             except ConnectionError:
                 raise ClusterError("--cluster auto: no running Ray cluster on this machine "
                                    "(ray start --head, or give HOST:PORT)") from None
-        _probe(ray, addr)
+        _probe(addr)
         import logging
 
+        # Ray prints the cluster's news (a node died, with the node's state dump) on stdout, which is the
+        # study's (--json): its first line, to stderr
+        w = ray._private.worker
+        w.print_to_stdstream = lambda data, _print=w.print_to_stdstream, **kw: _print(
+            {**data, "is_err": True, "lines": [str(ln).split("\n")[0][:200] for ln in data["lines"]]}, **kw)
         try:
             ray.init(address=addr, logging_level=logging.ERROR, log_to_driver=False)
         except (ConnectionError, RuntimeError, ValueError) as exc:
@@ -145,7 +147,5 @@ def run_tasks(addr: str, fn, todo: list, done, interrupted: list) -> None:
             except Exception:  # noqa: BLE001 (finished meanwhile)
                 pass
         if pending:
-            import sys
-
             print(f"cancelled the study's {len(pending)} unfinished tasks on the cluster", file=sys.stderr)
         raise
