@@ -252,3 +252,45 @@ def test_parallel_map_keeps_any_job_in_order(tmp_path):
     out = parallel_map(abs, [-3, 2, -1, 0], Pool(2, keep=tmp_path))
     assert out == [3, 2, 1, 0] == parallel_map(abs, [-3, 2, -1, 0], Pool(2, keep=tmp_path))
     assert len(list((tmp_path / code_digest()).glob("*.json"))) == 4
+
+
+# -- the searches ---------------------------------------------------------------------------------------
+
+def _search(out: Path, *more, env=None):
+    args = ["search", "--search-seeds", "0-1", "--statement-seeds", "0-19", "--gate", "0", "--out", str(out), *more]
+    return subprocess.run([sys.executable, str(TOOLS / "error_search.py"), *map(str, args)], capture_output=True,
+                          text=True, env=env, timeout=600)
+
+
+def _trials(out: Path) -> list[dict]:
+    return [json.loads(ln) for ln in (out / "trials.jsonl").read_text().splitlines()]
+
+
+def test_a_search_started_again_goes_on_where_it_stopped(tmp_path):
+    pytest.importorskip("optuna")
+    whole = _search(tmp_path / "whole", "--trials", 3)
+    assert whole.returncode == 0, whole.stderr
+    first = _search(tmp_path / "split", "--trials", 2)
+    assert first.returncode == 0, first.stderr
+    runs = kept_files(tmp_path / "split")
+    again = _search(tmp_path / "split", "--trials", 3)
+    assert again.returncode == 0, again.stderr
+    assert "2 trials done, 1 to go" in again.stderr
+    # the same three trials as one search of three (the sampler's seed, the study's history), each run once
+    strip = lambda ts: [{k: t[k] for k in ("open", "score", "trial")} for t in ts]  # noqa: E731
+    assert strip(_trials(tmp_path / "split")) == strip(_trials(tmp_path / "whole"))
+    assert {k: v for k, v in kept_files(tmp_path / "split").items() if k in runs} == runs
+    bad = _search(tmp_path / "bad", "--trials", 1, "--storage", "nosuchdb://x")
+    assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1, bad.stderr
+    assert bad.stderr.startswith("error_search.py: error: --storage nosuchdb://x: ")
+
+
+@pytest.mark.ray
+def test_a_search_on_a_cluster_scores_as_here(cluster, tmp_path):
+    pytest.importorskip("optuna")
+    here = _search(tmp_path / "here", "--trials", 2)
+    there = _search(tmp_path / "there", "--trials", 2, "--parallel-trials", 2, "--cluster", cluster.address,
+                    env=cluster.env)
+    assert here.returncode == 0 and there.returncode == 0, there.stderr
+    by_open = lambda ts: sorted((json.dumps(t["open"], sort_keys=True), t["score"]) for t in ts)  # noqa: E731
+    assert by_open(_trials(tmp_path / "there")) == by_open(_trials(tmp_path / "here"))

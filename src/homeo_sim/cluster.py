@@ -14,6 +14,7 @@ import re
 import socket
 import subprocess
 import sys
+import threading
 import time
 from collections import deque
 
@@ -73,8 +74,17 @@ def _probe(addr: str) -> None:
         raise ClusterError(f"{addr} does not answer as a Ray cluster within {CONNECT_WAIT:g} s")
 
 
+_CONNECTING = threading.Lock()  # a search's parallel trials connect at once
+_TASK: list = []  # the remote function, made once connected
+
+
 def connect(addr: str):
     """Ray, connected to the cluster at ``addr`` (once per process)."""
+    with _CONNECTING:
+        return _connect(addr)
+
+
+def _connect(addr: str):
     ray = _ray()
     if not ray.is_initialized():
         if addr == "auto":
@@ -95,6 +105,8 @@ def connect(addr: str):
             ray.init(address=addr, logging_level=logging.ERROR, log_to_driver=False)
         except (ConnectionError, RuntimeError, ValueError) as exc:
             raise ClusterError(f"cannot join the Ray cluster at {addr}: {str(exc).splitlines()[0][:160]}") from None
+    if not _TASK:
+        _TASK.append(ray.remote(max_retries=RETRIES)(_on_node))
     return ray
 
 
@@ -108,14 +120,10 @@ def _on_node(fn, a):
     return ray.get_runtime_context().get_node_id(), code_digest(), fn(a)
 
 
-_TASK: list = []
-
 
 def run_tasks(addr: str, fn, todo: list, done, interrupted: list) -> None:
     """``done(i, fn(a), note)`` for each ``(i, a)`` of ``todo`` run as a task; Ctrl-C cancels the rest."""
     ray = connect(addr)
-    if not _TASK:
-        _TASK.append(ray.remote(max_retries=RETRIES)(_on_node))
     refs = {_TASK[0].remote(fn, a): i for i, a in todo}
     pending, recent = list(refs), deque()
     try:
