@@ -99,15 +99,7 @@ def test_an_interrupted_study_runs_only_what_is_missing(cluster, tmp_path):
     out = tmp_path / "study"
     args = ("sweep", "xi", "--seeds", 4, "--iterations", 2000, "--json", "--quiet", "--out", out,
             "--cluster", cluster.address)
-    proc = subprocess.Popen([sys.executable, "-m", "homeo_sim.cli", *map(str, args)], env=cluster.env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        _wait_for_kept(out, 3, proc)
-        proc.send_signal(signal.SIGINT)
-        _, err = proc.communicate(timeout=120)
-    finally:
-        proc.kill()
-    assert proc.returncode == 130, err
+    err = _interrupted(args, out, 3, cluster.env)
     before = kept_files(out)
     m = re.search(r"interrupted: (\d+) of (\d+) runs kept in (\S+)", err)
     assert m and int(m[1]) == len(before) and Path(m[3]) == out / "runs" / code_digest(), err
@@ -121,6 +113,20 @@ def test_an_interrupted_study_runs_only_what_is_missing(cluster, tmp_path):
     assert {k: after[k] for k in before} == before  # the kept runs were read, not run again
     local = cli(*args[:-2])
     assert json.loads(again.stdout) == json.loads(local.stdout)
+
+
+def _interrupted(args, out: Path, n: int, env=None) -> str:
+    """Ctrl-C to ``homeo-sim ARGS`` once it kept ``n`` runs in ``out``: its stderr (exit 130 checked)."""
+    proc = subprocess.Popen([sys.executable, "-m", "homeo_sim.cli", *map(str, args)], env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        _wait_for_kept(out, n, proc)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=120)
+    finally:
+        proc.kill()
+    assert proc.returncode == 130, err
+    return err
 
 
 def _wait_for_kept(out: Path, n: int, proc, limit: float = 300) -> None:
@@ -160,15 +166,7 @@ def test_kept_runs_are_read_back_exactly_and_used(tmp_path):
 
 
 def test_ctrl_c_with_out_says_how_many_runs_are_kept(tmp_path):
-    proc = subprocess.Popen([sys.executable, "-m", "homeo_sim.cli", "run", "--seeds", "400", "--quiet", "--out",
-                             str(tmp_path)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        _wait_for_kept(tmp_path, 2, proc)
-        proc.send_signal(signal.SIGINT)
-        _, err = proc.communicate(timeout=60)
-    finally:
-        proc.kill()
-    assert proc.returncode == 130
+    err = _interrupted(("run", "--seeds", "400", "--quiet", "--out", tmp_path), tmp_path, 2)
     m = re.fullmatch(r"interrupted: (\d+) of 400 runs kept in (\S+)\nhomeo-sim: interrupted\n", err)
     assert m and int(m[1]) == len(kept_files(tmp_path)) >= 2, err
 

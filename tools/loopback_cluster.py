@@ -57,6 +57,9 @@ class LoopbackCluster:
 
     def stop(self) -> None:
         if self.cluster is not None:
+            import ray
+
+            ray.shutdown()  # this process's own driver, if it was one (the cluster stops only without one)
             self.cluster.shutdown()
             self.cluster = None
         shutil.rmtree(self.tmp, ignore_errors=True)

@@ -40,6 +40,7 @@ from homeo_msgs_py.learning import add_learning_flags, add_no_pseudo_flag, learn
 from .parallel import Pool, add_cluster_argument
 from .runner import RUN_LEARNING, RunConfig, build_scenario, run_episode, run_seeds
 from .stats import aggregate, describe, json_safe
+from .sweep import progress_bar
 
 PROG = "homeo-sim"
 
@@ -152,13 +153,6 @@ def _per_seed_path(path: str | None, seed: int, many: bool) -> str | None:
     return str(p.with_name(f"{p.stem}.seed{seed}{p.suffix}"))
 
 
-def _progress(total: int, unit: str, quiet: bool):
-    from tqdm import tqdm
-
-    return tqdm(total=total, unit=unit, disable=True if quiet else None, file=sys.stderr, leave=False,
-                dynamic_ncols=True)
-
-
 def cmd_run(args) -> int:
     cfg, seeds = config_from_args(args)
     sc = build_scenario(cfg)  # validates the scenario before any worker starts
@@ -180,10 +174,10 @@ def cmd_run(args) -> int:
         raise UserError(f"{'--cluster' if args.cluster else '--out'}: runs that read or write files (--trace, --save-q, "
                         "--load-q, --save-intention, --load-intention) run here, one after the other")
     if (many or args.cluster or args.out) and not (cfg.trace or cfg.save_q or cfg.load_q or cfg.save_intention):
-        with _progress(len(seeds), "seed", args.quiet) as bar:
+        with progress_bar(len(seeds), args.quiet, unit="seed") as bar:
             results = run_seeds(cfg, seeds, pool(args, _out_dir(args.out) if args.out else None), bar)
     else:
-        with _progress(len(seeds) * cfg.iterations, "it", args.quiet) as bar:
+        with progress_bar(len(seeds) * cfg.iterations, args.quiet, unit="it") as bar:
             step = max(1, cfg.iterations // 100)
             tick = lambda t: bar.update(step) if t % step == step - 1 else None  # noqa: E731
             for s in seeds:

@@ -170,10 +170,10 @@ def run_jobs(cfgs: Sequence[RunConfig], seeds: Iterable[int], workers=None, curv
     return [[done[(k, s)] for s in seeds] for k in keys]
 
 
-def progress_bar(total: int, quiet: bool, desc: str | None = None):
+def progress_bar(total: int, quiet: bool, desc: str | None = None, unit: str = "run"):
     from tqdm import tqdm
 
-    return tqdm(total=total, unit="run", desc=desc, disable=True if quiet else None, file=sys.stderr, leave=False,
+    return tqdm(total=total, unit=unit, desc=desc, disable=True if quiet else None, file=sys.stderr, leave=False,
                 dynamic_ncols=True)
 
 
