@@ -9,10 +9,10 @@
     homeo-sim sweep {xi,dod,pseudo} [--seeds K] [--first-seed N] [--iterations N] [--out DIR] [--json]
                     [--workers W | --cluster ADDRESS] [--quiet]
     homeo-sim report --out DIR [--seeds K] [--first-seed N] [--iterations N] [--workers W | --cluster ADDRESS] [--quiet]
+    homeo-sim bench [--intention {oracle,bayes}] [--json]
 
 With --out DIR, each finished run is kept in DIR/runs as it finishes; the same command again (after
 Ctrl-C, or a driver that died) runs only the missing runs. --cluster runs them as Ray tasks (homeo_sim.cluster).
-    homeo-sim bench [--intention {oracle,bayes}] [--json]
 """
 
 from __future__ import annotations

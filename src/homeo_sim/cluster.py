@@ -120,7 +120,6 @@ def _on_node(fn, a):
     return ray.get_runtime_context().get_node_id(), code_digest(), fn(a)
 
 
-
 def run_tasks(addr: str, fn, todo: list, done, interrupted: list) -> None:
     """``done(i, fn(a), note)`` for each ``(i, a)`` of ``todo`` run as a task; Ctrl-C cancels the rest."""
     ray = connect(addr)

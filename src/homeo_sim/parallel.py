@@ -89,7 +89,7 @@ def parallel_map(fn: Callable[[A], R], args: Sequence[A], workers: int | Pool | 
     main_thread = threading.current_thread() is threading.main_thread()
     old = signal.signal(signal.SIGINT, lambda *_: interrupted.append(1)) if main_thread else None
     try:
-        if pool.cluster:
+        if pool.cluster and todo:  # all kept: no need of the cluster
             from .cluster import run_tasks
 
             run_tasks(pool.cluster, fn, todo, done, interrupted)
