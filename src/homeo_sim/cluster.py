@@ -2,13 +2,15 @@
 
 Each run is one task; a task whose node dies is run again elsewhere (Ray's retries), and since a run is
 seeded by its own arguments it gives the same result wherever and whenever it runs. A node whose code
-differs from the driver's (``parallel.code_digest``) is refused: its numbers could differ. Nothing here
+differs from the driver's (``code_digest``, also the key of kept runs) is refused: its numbers could differ. Nothing here
 imports Ray before a study asks for a cluster.
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
+import hashlib
 import os
 import re
 import socket
@@ -17,15 +19,28 @@ import sys
 import threading
 import time
 from collections import deque
+from pathlib import Path
 
 from homeo_msgs_py.cli_args import UserError
-
-from .parallel import code_digest
 
 INSTALL = "pip install '.[cluster]' (in a checkout: make cluster-setup)"
 CONNECT_WAIT = 15.0  # s: how long an address may take to answer as a Ray cluster
 RETRIES = 3  # a task lost with its node is run again this many times
 NODES_WINDOW = 10.0  # s: a node is in use if it finished a run this recently
+PACKAGES = ("homeo_sim", "homeo_decision", "homeo_intention", "homeo_msgs_py")  # what a run's numbers depend on
+
+
+@functools.lru_cache(maxsize=1)
+def code_digest() -> str:
+    """Digest of the packages' sources and scenarios: a kept job (or a cluster node) of other code differs."""
+    import importlib
+
+    h = hashlib.sha256()
+    for pkg in PACKAGES:
+        root = Path(importlib.import_module(pkg).__file__).parent
+        for f in sorted(p for p in root.rglob("*") if p.suffix in (".py", ".json")):
+            h.update(f.relative_to(root).as_posix().encode() + b"\0" + f.read_bytes())
+    return h.hexdigest()[:16]
 
 
 class ClusterError(UserError):

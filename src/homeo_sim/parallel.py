@@ -14,7 +14,6 @@ from __future__ import annotations
 import argparse
 import base64
 import dataclasses
-import functools
 import hashlib
 import json
 import os
@@ -24,6 +23,8 @@ import threading
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from pathlib import Path
 from typing import Callable, Sequence, TypeVar
+
+from .cluster import address, code_digest, cpus, run_tasks
 
 A = TypeVar("A")
 R = TypeVar("R")
@@ -41,8 +42,6 @@ class Pool:
 
 def add_cluster_argument(p: argparse.ArgumentParser) -> None:
     """``--cluster ADDRESS``: the one definition every study command and search shares."""
-    from .cluster import address
-
     p.add_argument("--cluster", metavar="ADDRESS", type=address, default=None,
                    help="run on the Ray cluster at ADDRESS (auto, HOST:PORT or ray://HOST:PORT; pip install "
                         "'.[cluster]'); default: local processes")
@@ -52,8 +51,6 @@ def slots(workers: int | Pool | None, jobs: int) -> int:
     """How many jobs run at once: the local processes, or the cluster's CPUs."""
     pool = workers if isinstance(workers, Pool) else Pool(workers)
     if pool.cluster:
-        from .cluster import cpus
-
         return cpus(pool.cluster)
     return max(1, min(pool.workers or os.cpu_count() or 1, jobs or 1))
 
@@ -90,8 +87,6 @@ def parallel_map(fn: Callable[[A], R], args: Sequence[A], workers: int | Pool | 
     old = signal.signal(signal.SIGINT, lambda *_: interrupted.append(1)) if main_thread else None
     try:
         if pool.cluster and todo:  # all kept: no need of the cluster
-            from .cluster import run_tasks
-
             run_tasks(pool.cluster, fn, todo, done, interrupted)
         else:
             _run_local(fn, todo, pool.workers, done, interrupted)
@@ -135,22 +130,6 @@ def _run_local(fn, todo: list, workers: int | None, done, interrupted: list) -> 
 
 # -- kept jobs ---------------------------------------------------------------------------
 
-PACKAGES = ("homeo_sim", "homeo_decision", "homeo_intention", "homeo_msgs_py")  # what a run's numbers depend on
-
-
-@functools.lru_cache(maxsize=1)
-def code_digest() -> str:
-    """Digest of the packages' sources and scenarios: a kept job (or a cluster node) of other code differs."""
-    import importlib
-
-    h = hashlib.sha256()
-    for pkg in PACKAGES:
-        root = Path(importlib.import_module(pkg).__file__).parent
-        for f in sorted(p for p in root.rglob("*") if p.suffix in (".py", ".json")):
-            h.update(f.relative_to(root).as_posix().encode() + b"\0" + f.read_bytes())
-    return h.hexdigest()[:16]
-
-
 def _plain(x):
     if dataclasses.is_dataclass(x):
         return {"": type(x).__name__, **{f.name: _plain(getattr(x, f.name)) for f in dataclasses.fields(x)}}
@@ -167,6 +146,13 @@ def _plain(x):
 
 
 ARRAY_TYPES = ("<f4", "<f8", "<i4", "<i8", "|b1")
+KEPT_TYPES: dict[str, type] = {}  # the dataclasses a kept job may hold (``keeps``)
+
+
+def keeps(cls: type) -> type:
+    """Class decorator: results of this dataclass may be kept (and decoded back)."""
+    KEPT_TYPES[cls.__name__] = cls
+    return cls
 
 
 def _typed(x, types: dict):
@@ -210,16 +196,12 @@ class Kept:
 
     def load(self) -> dict:
         """The jobs already kept (a file that does not decode is run again)."""
-        from .runner import EpisodeResult
-        from .sweep import JobResult
-
-        types = {"EpisodeResult": EpisodeResult, "JobResult": JobResult}
         out = {}
         for i, k in enumerate(self.keys):
             f = self.dir / f"{k}.json"
             if f.is_file():
                 try:
-                    out[i] = _typed(json.loads(f.read_text()), types)
+                    out[i] = _typed(json.loads(f.read_text()), KEPT_TYPES)
                 except (ValueError, TypeError, KeyError, AttributeError, RecursionError):
                     continue
         return out

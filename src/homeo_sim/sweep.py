@@ -26,7 +26,7 @@ from homeo_decision.scenario.reference import DOD_SWEEP, PSEUDO_SWEEP, XI_SWEEP
 from homeo_msgs_py.learning import DOD, PSEUDO_UPDATE, XI
 
 from .metrics import INSECURE
-from .parallel import parallel_map
+from .parallel import keeps, parallel_map
 from .runner import RUN_LEARNING, RunConfig, Simulation, cached_scenario
 from .stats import aggregate
 
@@ -69,6 +69,7 @@ def _key(cfg: RunConfig) -> str:
 
 # -- one job ---------------------------------------------------------------------------
 
+@keeps
 @dataclass
 class JobResult:
     seed: int
