@@ -225,12 +225,12 @@ def test_an_unreachable_cluster_is_one_line_within_a_bounded_wait():
     try:
         for addr, said in ((f"127.0.0.1:{port}", "cannot reach the Ray cluster at"),
                            (f"ray://127.0.0.1:{port}", "cannot reach the Ray cluster at"),
-                           (f"127.0.0.1:{listener.getsockname()[1]}", "does not answer as a Ray cluster within 15 s")):
+                           (f"127.0.0.1:{listener.getsockname()[1]}", "does not answer as a Ray cluster within 30 s")):
             t0 = time.monotonic()
             proc = cli("run", "--seeds", 2, "--iterations", 50, "--cluster", addr, timeout=120)
             assert proc.returncode == 2 and said in proc.stderr, proc.stderr
             assert len(proc.stderr.strip().splitlines()) == 1 and proc.stdout == "", proc.stderr
-            assert time.monotonic() - t0 < 60
+            assert time.monotonic() - t0 < 120  # the wait is 30 s; the rest, starting Python on a busy machine
     finally:
         listener.close()
     env = {k: v for k, v in os.environ.items() if k != "RAY_ADDRESS"}

@@ -24,7 +24,7 @@ from pathlib import Path
 from homeo_msgs_py.cli_args import UserError
 
 INSTALL = "pip install '.[cluster]' (in a checkout: make cluster-setup)"
-CONNECT_WAIT = 15.0  # s: how long an address may take to answer as a Ray cluster
+CONNECT_WAIT = 30.0  # s: how long an address may take to answer as a Ray cluster (a busy machine's included)
 RETRIES = 3  # a task lost with its node is run again this many times
 NODES_WINDOW = 10.0  # s: a node is in use if it finished a run this recently
 PACKAGES = ("homeo_sim", "homeo_decision", "homeo_intention", "homeo_msgs_py")  # what a run's numbers depend on
