@@ -39,6 +39,13 @@ class LoopbackCluster:
         self.tmp = tempfile.mkdtemp(prefix="ray", dir="/tmp")  # short: Ray's socket paths are limited to 107 bytes
         self.env = {**os.environ, **ENV, "RAY_TMPDIR": self.tmp}
         os.environ.update({**ENV, "RAY_TMPDIR": self.tmp})  # Cluster starts the nodes with this process's env
+        try:
+            return self._start()
+        except BaseException:
+            self.stop()  # a node that did not come up (a busy machine): what did is stopped, the folder removed
+            raise
+
+    def _start(self) -> "LoopbackCluster":
         from ray.cluster_utils import Cluster
 
         self.cluster = Cluster(initialize_head=True, shutdown_at_exit=True, head_node_args=dict(
@@ -62,6 +69,7 @@ class LoopbackCluster:
             ray.shutdown()  # this process's own driver, if it was one (the cluster stops only without one)
             self.cluster.shutdown()
             self.cluster = None
+        self.nodes = []
         shutil.rmtree(self.tmp, ignore_errors=True)
         os.environ.pop("RAY_TMPDIR", None)
 
