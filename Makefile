@@ -10,7 +10,8 @@ PY     := $(shell $(PYTHON) -c 'import sys; print(sys.executable)' 2>/dev/null |
 # the real ros2 command line and launch system (wheels of their Jazzy sources), for the workspace tests
 ROS2_TOOLS ?= $(wildcard ../shared/ros2-tools)
 
-.PHONY: setup run test test-core test-py312 ros2-tools bench report calibrate-setup profile-setup mutation-setup mutation clean
+.PHONY: setup run test test-core test-py312 ros2-tools bench report calibrate-setup profile-setup cluster-setup \
+        mutation-setup mutation clean
 
 setup: $(STAMP)
 
@@ -29,7 +30,7 @@ run: setup
 # its own ROS domains and data directory (tests/rosgraph.py, tests/conftest.py)
 WORKERS ?= 2
 
-test: setup ros2-tools profile-setup calibrate-setup
+test: setup ros2-tools profile-setup calibrate-setup cluster-setup
 	$(BIN)/python -m pytest -q -n $(WORKERS)
 
 # the core, the graph's equivalence with the in-process runner, and the launch tests (ros2 launch in a
@@ -76,6 +77,10 @@ MUTATION_JOBS ?= 1
 MUTATION_BUDGET ?= 1800
 mutation: mutation-setup
 	$(BIN)/python tools/mutation.py --jobs $(MUTATION_JOBS) --budget $(MUTATION_BUDGET) $(MODULES)
+
+# the cluster extra (--cluster ADDRESS: Ray); `make test` installs it so that the cluster tests run
+cluster-setup: setup
+	$(BIN)/pip install --disable-pip-version-check -q --no-deps -r tools/requirements-cluster.lock
 
 clean:
 	rm -rf $(VENV) .venv312 build install log src/*.egg-info

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -182,9 +183,9 @@ def test_json_is_strict_json_without_intentions():
     json.loads(proc.stdout, parse_constant=reject)
 
 
-@pytest.mark.parametrize("args", [["run", "--seeds", "400"], ["sweep", "dod", "--seeds", "40"]])
-def test_ctrl_c_stops_workers_and_says_so(args):
-    # Ctrl-C in the middle of a parallel run: exit 130, one line, and no worker left behind
+@pytest.mark.parametrize("args,runs", [(["run", "--seeds", "400"], 400), (["sweep", "dod", "--seeds", "40"], 440)])
+def test_ctrl_c_stops_workers_and_says_so(args, runs):
+    # Ctrl-C in the middle of a parallel run: exit 130, how many runs had finished, and no worker left behind
     import os
     import signal
     import time
@@ -199,7 +200,9 @@ def test_ctrl_c_stops_workers_and_says_so(args):
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, err
-    assert err.strip().splitlines() == ["homeo-sim: interrupted"]
+    said = err.strip().splitlines()
+    assert said[1:] == ["homeo-sim: interrupted"], err
+    assert re.fullmatch(rf"interrupted: \d+ of {runs} runs finished \(none kept: --out DIR keeps them\)", said[0]), err
     for pid in kids:
         for _ in range(100):
             if not os.path.exists(f"/proc/{pid}") or "Z" in _state(pid):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 
@@ -45,10 +46,12 @@ def test_sweep_point_equals_homeo_sim_run():
 
 
 def test_duplicate_configurations_run_once_and_share_results():
-    calls = []
+    from tqdm import tqdm
+
     cfg = RunConfig(iterations=100, xi=1.0)
-    out = run_jobs([cfg, RunConfig(iterations=100, xi=0.0), cfg], [3], workers=1, on_done=lambda: calls.append(1))
-    assert len(calls) == 2
+    with tqdm(total=2, disable=False, file=open(os.devnull, "w")) as bar:
+        out = run_jobs([cfg, RunConfig(iterations=100, xi=0.0), cfg], [3], workers=1, bar=bar)
+        assert bar.n == 2
     assert out[0][0] is out[2][0] and out[0][0].metrics != out[1][0].metrics
 
 

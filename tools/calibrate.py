@@ -25,8 +25,10 @@ With none of them, --table --trends --sensitivity run (about 1-2 minutes on 2 co
 
     .venv/bin/python tools/calibrate.py --seeds 20
 
-Runs go one after the other, each on --workers processes (default 2). Results can be
-cached in a JSON file (--cache) so that a repeated call does not recompute.
+Runs go one after the other, each on --workers processes (default 2) or, with --cluster ADDRESS, as Ray
+tasks on a cluster (docs/EXPERIMENTS.md, "On a cluster"). Results can be cached in a JSON file (--cache)
+so that a repeated call does not recompute; --joint keeps each finished run in --out/runs, and the same
+command again runs only the missing runs.
 """
 
 from __future__ import annotations
@@ -41,6 +43,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
+from homeo_msgs_py.cli_args import UserError  # noqa: E402
+from homeo_sim.parallel import Pool, add_cluster_argument  # noqa: E402
 from homeo_sim.runner import RunConfig, run_seeds  # noqa: E402
 from homeo_sim.stats import aggregate  # noqa: E402
 from homeo_decision.scenario import load_scenario  # noqa: E402
@@ -491,6 +495,7 @@ def main(argv=None) -> int:
     ap.add_argument("--screen-seeds", type=int, default=8, help="seeds per grid point in the search (default 8)")
     ap.add_argument("--iterations", type=int, default=5000)
     ap.add_argument("--workers", type=int, default=2)
+    add_cluster_argument(ap)
     ap.add_argument("--cache", default=None, help="JSON file to cache results in")
     ap.add_argument("--search", action="store_true")
     ap.add_argument("--table", action="store_true")
@@ -529,7 +534,7 @@ def main(argv=None) -> int:
         import joint_search
 
         # --workers processes run the seeds of one point (the search's trials stay sequential)
-        w = max(a.workers, 1)
+        w = Pool(max(a.workers, 1), a.cluster, Path(a.out) / "runs")
         try:
             if a.refine:
                 joint_search.refine(a.validate_seeds, a.confirm_seeds, a.confirm_best, a.combine, a.out, workers=w)
@@ -539,13 +544,16 @@ def main(argv=None) -> int:
             else:
                 joint_search.run(a.trials, a.search_seeds, a.confirm_seeds, a.confirm_best, a.sampler_seed, a.out,
                                  workers=w, resume_from=a.resume_from, validate=(a.validate_seeds, a.validate_best))
-        except (joint_search.TrialsFileError, joint_search.SeedSetError) as exc:
+        except (joint_search.TrialsFileError, joint_search.SeedSetError, UserError) as exc:
             print(f"calibrate: {exc}", file=sys.stderr)
             return 2
+        except KeyboardInterrupt:
+            print("calibrate: interrupted", file=sys.stderr)
+            return 130
         return 0
     if not (a.search or a.table or a.trends or a.sensitivity or a.curves or a.probe_record_point):
         a.table = a.trends = a.sensitivity = True
-    r = Runner(a.iterations, a.workers, a.cache)
+    r = Runner(a.iterations, Pool(a.workers, a.cluster), a.cache)
     chosen = dict(CHOSEN)
     for s in a.set:
         k, v = s.split("=", 1)

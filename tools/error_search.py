@@ -8,6 +8,12 @@ from and confirmed on seeds it never saw (docs/FIDELITY.md, "Issue 25").
         --seeds 3000-3099 --out calibrate-errors     # the best distinct points on seeds of their own
     .venv/bin/python tools/error_search.py confirm --seeds 5000-5099 [--change KEY=JSON ...]   # one point
 
+Each command takes --workers W (local processes) or --cluster ADDRESS (the runs as Ray tasks on a cluster);
+with --out, each finished run is kept in OUT/runs and the same command again runs only the missing runs.
+The search's trials live in an Optuna study storage (--storage: an RDB URL, default the SQLite file
+OUT/study.db; a database server for drivers on several machines): started again, the search goes on
+where it stopped (a trial whose driver died is retried), and --parallel-trials K evaluates K trials at once.
+
 What one evaluation runs (5000 iterations each): the default run on the table seeds (the 12 numbers:
 the relative error of our mean), and on the statement seeds, in sets of 20, the runs the ten criteria
 read (xi 0 and 2, no pseudo update, the DoD grid; the search's grid stops at 0.6 plus 1, as issue 15's
@@ -38,6 +44,7 @@ import joint_search as j  # noqa: E402
 from homeo_msgs_py.cli_args import Parser, UserError, float_in, int_at_least, run_command  # noqa: E402
 from homeo_sim.report.fidelity import (GOALS, error_summary, relative_errors, seed_sets, set_aggregates,  # noqa: E402
                                        statement_shares, statements_goal_met)
+from homeo_sim.parallel import Pool, add_cluster_argument  # noqa: E402
 from homeo_sim.runner import run_seeds  # noqa: E402
 from homeo_sim.stats import aggregate  # noqa: E402
 from homeo_sim.sweep import SWEEPS  # noqa: E402
@@ -169,18 +176,42 @@ HINTS = ({}, {"ongoing_effects": "every_tick"}, {"ongoing_effects": "every_tick"
          {"ongoing_effects": "every_tick", "human_no_intention_prob": 0.2, "tie_break": "last"})
 
 
+def study_of(storage: str, sampler_seed: int):
+    """The search's Optuna study in ``storage`` (created, or loaded to go on); a trial whose driver stopped
+    sending heartbeats is failed and retried once a new trial starts."""
+    import warnings
+
+    import optuna
+    from optuna.storages import RDBStorage, RetryHeartbeatStaleTrialCallback
+
+    warnings.filterwarnings("ignore", category=optuna.exceptions.ExperimentalWarning)  # the heartbeat, since 2.8
+    try:
+        rdb = RDBStorage(storage, heartbeat_interval=60, grace_period=180,
+                         heartbeat_stale_trial_callback=RetryHeartbeatStaleTrialCallback(max_retry=3))
+    except Exception as exc:  # noqa: BLE001 (whatever SQLAlchemy says of a URL or a database it cannot open)
+        raise UserError(f"--storage {storage[:80]}: {str(exc).splitlines()[0][:120]}") from None
+    return optuna.create_study(study_name="error-search", storage=rdb, load_if_exists=True, direction="maximize",
+                               sampler=optuna.samplers.TPESampler(seed=sampler_seed, multivariate=True))
+
+
 def search(trials: int, table_seeds: list[int], statement_seeds: list[int], out: Path, sampler_seed: int,
-           workers: int, gate: float) -> list[dict]:
+           workers, gate: float, storage: str | None = None, parallel: int = 1) -> list[dict]:
+    """``trials`` trials in all, counting those the study in ``storage`` already completed."""
     import optuna
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     out.mkdir(parents=True, exist_ok=True)
     start, t0, evals = current_open(), time.time(), []
-    study = optuna.create_study(direction="maximize",
-                                sampler=optuna.samplers.TPESampler(seed=sampler_seed, multivariate=True))
-    for hint in HINTS:
-        study.enqueue_trial(params({**start, **hint}))
-    with (out / "trials.jsonl").open("w") as log:
+    study = study_of(storage or f"sqlite:///{(out / 'study.db').resolve()}", sampler_seed)
+    resumed = bool(study.trials)
+    if not resumed:
+        for hint in HINTS:
+            study.enqueue_trial(params({**start, **hint}))
+    done = sum(t.state == optuna.trial.TrialState.COMPLETE for t in study.trials)
+    if resumed:
+        print(f"study in {storage or out / 'study.db'}: {done} trials done, {max(0, trials - done)} to go",
+              file=sys.stderr, flush=True)
+    with (out / "trials.jsonl").open("a" if resumed else "w") as log:
         def objective(trial):
             e = evaluate(suggest(trial, start), table_seeds, statement_seeds, workers=workers, gate=gate)
             e.pop("_base", None)
@@ -191,7 +222,7 @@ def search(trials: int, table_seeds: list[int], statement_seeds: list[int], out:
             print(f"trial {trial.number:4d}: {line(e)}  ({time.time() - t0:.0f} s)", file=sys.stderr, flush=True)
             return e["score"]
 
-        study.optimize(objective, n_trials=trials)
+        study.optimize(objective, n_trials=max(0, trials - done), n_jobs=parallel)
     return evals
 
 
@@ -321,6 +352,9 @@ def build_parser() -> Parser:
     s.add_argument("--gate", type=float_in(0.0, 10.0), default=GATE,
                    help=f"skip the statements above this mean absolute error (default {GATE})")
     s.add_argument("--out", default="calibrate-errors")
+    s.add_argument("--storage", metavar="URL", default=None,
+                   help="the Optuna study's RDB URL (default: sqlite:///OUT/study.db); a database server for several drivers")
+    s.add_argument("--parallel-trials", type=int_at_least(1), default=1, metavar="K", help="trials evaluated at once")
     v = sub.add_parser("validate", help="the best distinct trials of a search on seeds of their own")
     v.add_argument("--from", dest="trials_file", required=True, metavar="TRIALS.jsonl")
     v.add_argument("--best", type=int_at_least(1), default=8)
@@ -339,6 +373,7 @@ def build_parser() -> Parser:
                    help="a point to score: the default with these changes (repeat for several points)")
     for p in (s, v, r, c):
         p.add_argument("--workers", type=int_at_least(1), default=1)
+        add_cluster_argument(p)
     return ap
 
 
@@ -346,9 +381,11 @@ def main(argv=None) -> int:
     def command() -> int:
         a = build_parser().parse_args(argv)
         start = current_open()
+        a.workers = Pool(a.workers, a.cluster, Path(a.out) / "runs" if "out" in a else None)
         if a.cmd == "search":
             t_seeds, s_seeds = seeds_arg(a.search_seeds), seeds_arg(a.statement_seeds)
-            search(a.trials, t_seeds, s_seeds, Path(a.out), a.sampler_seed, a.workers, a.gate)
+            search(a.trials, t_seeds, s_seeds, Path(a.out), a.sampler_seed, a.workers, a.gate, a.storage,
+                   a.parallel_trials)
             return 0
         if a.cmd == "refine":
             t_seeds, s_seeds = seeds_arg(a.search_seeds), seeds_arg(a.statement_seeds)

@@ -4,11 +4,15 @@
                   [--pseudo-update BOOL | --no-pseudo]
                   [--policy {objectq,random,rule,flatq,nofeedback}] [--adaptive-dod]
                   [--scenario FILE] [--set KEY=VALUE ...] [--save-q FILE] [--load-q FILE]
-                  [--trace FILE] [--json] [--workers W] [--quiet]
+                  [--trace FILE] [--json] [--workers W | --cluster ADDRESS] [--out DIR] [--quiet]
                   [--intention {oracle,bayes}] [--save-intention FILE] [--load-intention FILE]
-    homeo-sim sweep {xi,dod,pseudo} [--seeds K] [--first-seed N] [--iterations N] [--out DIR] [--json] [--workers W] [--quiet]
-    homeo-sim report --out DIR [--seeds K] [--first-seed N] [--iterations N] [--workers W] [--quiet]
+    homeo-sim sweep {xi,dod,pseudo} [--seeds K] [--first-seed N] [--iterations N] [--out DIR] [--json]
+                    [--workers W | --cluster ADDRESS] [--quiet]
+    homeo-sim report --out DIR [--seeds K] [--first-seed N] [--iterations N] [--workers W | --cluster ADDRESS] [--quiet]
     homeo-sim bench [--intention {oracle,bayes}] [--json]
+
+With --out DIR, each finished run is kept in DIR/runs as it finishes; the same command again (after
+Ctrl-C, or a driver that died) runs only the missing runs. --cluster runs them as Ray tasks (homeo_sim.cluster).
 """
 
 from __future__ import annotations
@@ -33,8 +37,10 @@ from homeo_msgs_py.cli_args import Parser, UserError, int_at_least, run_command,
 from homeo_msgs_py.graph import BAYES, INTENTION_MODES, ORACLE
 from homeo_msgs_py.learning import add_learning_flags, add_no_pseudo_flag, learning_values
 
+from .parallel import Pool, add_cluster_argument
 from .runner import RUN_LEARNING, RunConfig, build_scenario, run_episode, run_seeds
 from .stats import aggregate, describe, json_safe
+from .sweep import progress_bar
 
 PROG = "homeo-sim"
 
@@ -67,7 +73,13 @@ def add_common_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--set", metavar="KEY=VALUE", type=setting, action="append", default=[],
                    help="override an open choice of the scenario, e.g. --set human_no_intention_prob=0.5")
     p.add_argument("--workers", type=int_at_least(1), default=None, help="processes (default: all cores)")
+    add_cluster_argument(p)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def pool(args, out_dir: Path | None) -> Pool:
+    """Where the runs go: the local processes or the cluster; kept in ``out_dir``/runs."""
+    return Pool(args.workers, args.cluster, out_dir / "runs" if out_dir is not None else None)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -75,6 +87,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = ap.add_subparsers(dest="cmd", required=True, parser_class=Parser)
     run = sub.add_parser("run", help="run the simulation and print Table 4.5's metrics")
     add_run_arguments(run)
+    run.add_argument("--out", metavar="DIR", help="keep each finished run in DIR/runs (the same command again "
+                                                  "runs only the missing ones)")
     run.add_argument("--save-q", metavar="FILE", help="save the learned Q-table (with --seeds: FILE per seed)")
     run.add_argument("--load-q", metavar="FILE", help="start from a saved Q-table")
     run.add_argument("--trace", metavar="FILE", help="write one JSON line per iteration (with --seeds: FILE per seed)")
@@ -139,13 +153,6 @@ def _per_seed_path(path: str | None, seed: int, many: bool) -> str | None:
     return str(p.with_name(f"{p.stem}.seed{seed}{p.suffix}"))
 
 
-def _progress(total: int, unit: str, quiet: bool):
-    from tqdm import tqdm
-
-    return tqdm(total=total, unit=unit, disable=True if quiet else None, file=sys.stderr, leave=False,
-                dynamic_ncols=True)
-
-
 def cmd_run(args) -> int:
     cfg, seeds = config_from_args(args)
     sc = build_scenario(cfg)  # validates the scenario before any worker starts
@@ -162,11 +169,15 @@ def cmd_run(args) -> int:
         IntentionModel(sc).load(cfg.load_intention)  # a bad file fails here, in one line, not in a worker
     many = len(seeds) > 1
     results = []
-    if many and not (cfg.trace or cfg.save_q or cfg.load_q or cfg.save_intention):
-        with _progress(len(seeds), "seed", args.quiet) as bar:
-            results = run_seeds(cfg, seeds, args.workers, on_done=lambda r: bar.update(1))
+    files = cfg.trace or cfg.save_q or cfg.load_q or cfg.save_intention or cfg.load_intention
+    if files and (args.cluster or args.out):
+        raise UserError(f"{'--cluster' if args.cluster else '--out'}: runs that read or write files (--trace, --save-q, "
+                        "--load-q, --save-intention, --load-intention) run here, one after the other")
+    if (many or args.cluster or args.out) and not (cfg.trace or cfg.save_q or cfg.load_q or cfg.save_intention):
+        with progress_bar(len(seeds), args.quiet, unit="seed") as bar:
+            results = run_seeds(cfg, seeds, pool(args, _out_dir(args.out) if args.out else None), bar)
     else:
-        with _progress(len(seeds) * cfg.iterations, "it", args.quiet) as bar:
+        with progress_bar(len(seeds) * cfg.iterations, args.quiet, unit="it") as bar:
             step = max(1, cfg.iterations // 100)
             tick = lambda t: bar.update(step) if t % step == step - 1 else None  # noqa: E731
             for s in seeds:
@@ -245,7 +256,7 @@ def cmd_sweep(args) -> int:
     sc = build_scenario(base)  # validates the scenario before any worker starts
     out_dir = _out_dir(args.out) if args.out else None
     seeds = seed_range(args.first_seed, args.seeds)
-    out, raw = sweep(args.param, base, seeds, args.workers, quiet=args.quiet,
+    out, raw = sweep(args.param, base, seeds, pool(args, out_dir), quiet=args.quiet,
                      curves=out_dir is not None and args.param == PSEUDO_SWEEP)
     if out_dir is not None:
         from . import report
@@ -278,8 +289,8 @@ def cmd_report(args) -> int:
     base = RunConfig(iterations=args.iterations, scenario=args.scenario, overrides=tuple(args.set))
     build_scenario(base)
     out_dir = _out_dir(args.out)
-    data = build_report(out_dir, seeds=args.seeds, iterations=args.iterations, workers=args.workers, quiet=args.quiet,
-                        scenario=args.scenario, overrides=tuple(args.set), first_seed=args.first_seed)
+    data = build_report(out_dir, seeds=args.seeds, iterations=args.iterations, workers=pool(args, out_dir),
+                        quiet=args.quiet, scenario=args.scenario, overrides=tuple(args.set), first_seed=args.first_seed)
     fails = [c["check"] for c in data["checks"] if not c["ok"]]
     print(f"report written to {out_dir / 'report.md'} in {data['timing']['total_s']:.1f} s "
           f"({data['timing']['jobs']} runs on {data['timing']['workers']} workers)")
@@ -323,6 +334,8 @@ def cmd_bench(args) -> int:
 def main(argv=None) -> int:
     def command() -> int:
         args = build_parser().parse_args(argv)
+        if getattr(args, "cluster", None) and args.scenario and os.path.isfile(args.scenario):
+            args.scenario = os.path.abspath(args.scenario)  # a node's working directory is not ours
         return {"run": cmd_run, "sweep": cmd_sweep, "report": cmd_report, "bench": cmd_bench}[args.cmd](args)
 
     return run_command(PROG, command, (ScenarioError, QTableError, IntentionModelError), os_errors=True)

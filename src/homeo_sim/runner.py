@@ -23,6 +23,7 @@ from homeo_msgs_py.learning import DOD, PSEUDO_UPDATE, XI
 
 from .environment import SimEnvironment
 from .metrics import MetricRecorder, accuracy_ends
+from .parallel import keeps, parallel_map
 
 
 # the learning parameters a run takes (homeo-sim run's flags): RunConfig's fields of the same names
@@ -50,6 +51,7 @@ class RunConfig:
     save_intention: str | None = None
 
 
+@keeps
 @dataclass
 class EpisodeResult:
     seed: int
@@ -205,10 +207,8 @@ def _run_one(cfg: RunConfig) -> EpisodeResult:
     return run_episode(cfg, cached_scenario(cfg))
 
 
-def run_seeds(cfg: RunConfig, seeds: Iterable[int], workers: int | None = None,
-              on_done: Callable[[EpisodeResult], None] | None = None) -> list[EpisodeResult]:
-    """Run one episode per seed, on ``workers`` processes; results come back in seed order."""
-    from .parallel import parallel_map
-
+def run_seeds(cfg: RunConfig, seeds: Iterable[int], workers=None, bar=None) -> list[EpisodeResult]:
+    """Run one episode per seed, on ``workers`` processes (or a ``parallel.Pool``); results come back in
+    seed order; ``bar`` counts them."""
     cfgs = [replace(cfg, seed=s, trace=None, save_q=None, save_intention=None) for s in seeds]
-    return parallel_map(_run_one, cfgs, workers, on_done)
+    return parallel_map(_run_one, cfgs, workers, bar)

@@ -17,7 +17,7 @@ import json
 import math
 import sys
 from dataclasses import dataclass, field, replace
-from typing import Callable, Iterable, Sequence
+from typing import Iterable, Sequence
 
 import numpy as np
 
@@ -26,7 +26,7 @@ from homeo_decision.scenario.reference import DOD_SWEEP, PSEUDO_SWEEP, XI_SWEEP
 from homeo_msgs_py.learning import DOD, PSEUDO_UPDATE, XI
 
 from .metrics import INSECURE
-from .parallel import parallel_map
+from .parallel import keeps, parallel_map
 from .runner import RUN_LEARNING, RunConfig, Simulation, cached_scenario
 from .stats import aggregate
 
@@ -69,6 +69,7 @@ def _key(cfg: RunConfig) -> str:
 
 # -- one job ---------------------------------------------------------------------------
 
+@keeps
 @dataclass
 class JobResult:
     seed: int
@@ -152,12 +153,12 @@ def _run_job_args(a: tuple) -> JobResult:
     return run_job(cfg, curves)
 
 
-def run_jobs(cfgs: Sequence[RunConfig], seeds: Iterable[int], workers: int | None = None, curves: bool = False,
-             on_done: Callable[[], None] | None = None) -> list[list[JobResult]]:
+def run_jobs(cfgs: Sequence[RunConfig], seeds: Iterable[int], workers=None, curves: bool = False,
+             bar=None) -> list[list[JobResult]]:
     """Run every configuration with every seed; ``out[i][j]`` is cfgs[i] with seeds[j].
 
-    Duplicate configurations run once. ``workers`` processes (default: all cores) share
-    the jobs; the results do not depend on it. ``on_done`` is called once per finished job.
+    Duplicate configurations run once. ``workers`` processes (default: all cores) or a
+    ``parallel.Pool`` share the jobs; the results do not depend on it. ``bar`` counts finished jobs.
     """
     seeds = list(seeds)
     keys = [_key(c) for c in cfgs]
@@ -165,16 +166,15 @@ def run_jobs(cfgs: Sequence[RunConfig], seeds: Iterable[int], workers: int | Non
     for k, c in zip(keys, cfgs):
         uniq.setdefault(k, c)
     jobs = [(k, s) for k in uniq for s in seeds]
-    results = parallel_map(_run_job_args, [(replace(uniq[k], seed=s), curves) for k, s in jobs], workers,
-                           (lambda _r: on_done()) if on_done else None)
+    results = parallel_map(_run_job_args, [(replace(uniq[k], seed=s), curves) for k, s in jobs], workers, bar)
     done = dict(zip(jobs, results))
     return [[done[(k, s)] for s in seeds] for k in keys]
 
 
-def progress_bar(total: int, quiet: bool, desc: str | None = None):
+def progress_bar(total: int, quiet: bool, desc: str | None = None, unit: str = "run"):
     from tqdm import tqdm
 
-    return tqdm(total=total, unit="run", desc=desc, disable=True if quiet else None, file=sys.stderr, leave=False,
+    return tqdm(total=total, unit=unit, desc=desc, disable=True if quiet else None, file=sys.stderr, leave=False,
                 dynamic_ncols=True)
 
 
@@ -197,7 +197,7 @@ def summarize_point(results: Sequence[JobResult], drive_names: Sequence[str]) ->
     return aggregate([r.metrics for r in results], drive_names)
 
 
-def sweep(param: str, base: RunConfig, seeds: Iterable[int], workers: int | None = None, quiet: bool = True,
+def sweep(param: str, base: RunConfig, seeds: Iterable[int], workers=None, quiet: bool = True,
           curves: bool = False) -> tuple[dict, list[list[JobResult]]]:
     """Run one sweep; returns ``{"param", "points": [{"value", "metrics"}]}`` and the raw job results."""
     if param not in SWEEPS:
@@ -208,7 +208,7 @@ def sweep(param: str, base: RunConfig, seeds: Iterable[int], workers: int | None
     values = SWEEPS[param]
     cfgs = [point_config(param, v, base) for v in values]
     with progress_bar(n_jobs(cfgs, seeds), quiet, f"sweep {param}") as bar:
-        raw = run_jobs(cfgs, seeds, workers, curves, on_done=lambda: bar.update(1))
+        raw = run_jobs(cfgs, seeds, workers, curves, bar)
     points = [{"value": v, "metrics": summarize_point(rs, sc.drive_names)} for v, rs in zip(values, raw)]
     return {"param": param, "points": points}, raw
 

@@ -14,6 +14,7 @@ import os
 import time
 from pathlib import Path
 
+from ..parallel import slots
 from ..runner import RunConfig, cached_scenario
 from ..sweep import explicit, n_jobs, progress_bar, run_jobs, summarize_point
 from .analysis import _analyse, _jsonable, baselines_for, report_configs  # noqa: F401 (re-exported)
@@ -22,7 +23,7 @@ from .markdown import _markdown
 
 __all__ = ["baselines_for", "build_report", "fig_dod", "fig_pseudo", "fig_xi", "report_configs"]
 
-def build_report(out_dir: str | Path, seeds: int = 10, iterations: int = 5000, workers: int | None = None,
+def build_report(out_dir: str | Path, seeds: int = 10, iterations: int = 5000, workers=None,
                  quiet: bool = False, scenario: str | None = None, overrides: tuple = (), first_seed: int = 0) -> dict:
     """Run everything, write the figures, ``report.md`` and ``results.json`` into ``out_dir``."""
     t0 = time.perf_counter()
@@ -34,9 +35,9 @@ def build_report(out_dir: str | Path, seeds: int = 10, iterations: int = 5000, w
     cfgs = report_configs(base, baselines_for(sc))
     seed_list = list(range(first_seed, first_seed + seeds))
     labels = list(cfgs)
-    nw = max(1, min(workers or os.cpu_count() or 1, n_jobs(list(cfgs.values()), seed_list)))
+    nw = slots(workers, n_jobs(list(cfgs.values()), seed_list))
     with progress_bar(n_jobs(list(cfgs.values()), seed_list), quiet, "report") as bar:
-        raw = run_jobs([cfgs[k] for k in labels], seed_list, nw, curves=True, on_done=lambda: bar.update(1))
+        raw = run_jobs([cfgs[k] for k in labels], seed_list, workers, True, bar)
     R = dict(zip(labels, raw))
     t_runs = time.perf_counter() - t0
     names = sc.drive_names
