@@ -31,7 +31,7 @@ run: setup
 WORKERS ?= 2
 
 test: setup ros2-tools profile-setup calibrate-setup cluster-setup
-	$(BIN)/python -m pytest -q -n $(WORKERS)
+	$(BIN)/python -m pytest -q -n $(WORKERS) --dist loadgroup
 
 # the core, the graph's equivalence with the in-process runner, and the launch tests (ros2 launch in a
 # colcon workspace): what .ci/run runs on the second Python
@@ -39,7 +39,7 @@ CORE_TESTS = tests/test_golden.py tests/test_graph_stages.py tests/test_determin
              tests/test_objectq.py tests/test_reward.py tests/test_motivation.py tests/test_world_conformance.py \
              tests/test_ros2_workspace.py tests/test_example_world.py
 test-core: setup ros2-tools
-	$(BIN)/python -m pytest -q -n $(WORKERS) $(CORE_TESTS)
+	$(BIN)/python -m pytest -q -n $(WORKERS) --dist loadgroup $(CORE_TESTS)
 
 test-py312:
 	$(MAKE) test-core PYTHON=python3.12 VENV=.venv312
