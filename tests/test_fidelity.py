@@ -77,8 +77,6 @@ SWEEPS = {"dod": (0.0, 0.5, 1.0), "xi": (0.0, 2.0), "pseudo": (True, False)}
     (C("near", at="dod=0.0", metric="HSR", value=0.8, tol=0.1), False),
     (C("first_below", sweep="dod", metric="RSR", level=0.5, value=0.5, tol=0.1), True),  # first below at 0.5
     (C("first_below", sweep="dod", metric="RSR", level=0.5, value=0.2, tol=0.1), False),
-    (C("linear", sweep="dod", metric="RSR", points=[0.0, 0.5, 1.0], tol=0.1), True),  # 0.45 vs (0.95+0.05)/2
-    (C("linear", sweep="dod", metric="RSR", points=[0.0, 0.5, 1.0], tol=0.04), False),
     # HSR x RSR: 0.589 (0), 0.72 (base, 0.25), 0.405 (0.5), 0.0475 (1): best at the default's 0.25
     (C("best_near", sweep="dod", product=["HSR", "RSR"], value=0.2, tol=0.1), True),
     (C("best_near", sweep="dod", product=["HSR", "RSR"], value=0.5, tol=0.1), False),
@@ -178,7 +176,7 @@ def test_a_run_keeps_its_running_sums_at_the_stage_marks():
 
 def test_needed_labels_are_those_the_criteria_read():
     crits = [C("below", at="xi=0.0", metric="RSR", value=0.4),
-             C("linear", sweep="dod", metric="RSR", points=[0.0, 0.5, 1.0], tol=0.1),
+             C("sweep_corr", sweep="dod", metric="RSR", lo=-1.0, hi=-0.9),
              C("best_near", sweep="dod", product=["HSR", "RSR"], value=0.2, tol=0.1)]
     assert needed_labels(crits, SWEEPS) == {"base", "xi=0.0", "dod=0.0", "dod=0.5", "dod=1.0"}
 

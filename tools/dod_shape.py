@@ -24,11 +24,11 @@ from homeo_sim.runner import run_seeds  # noqa: E402
 from homeo_sim.sweep import SWEEPS  # noqa: E402
 
 PROG = "dod_shape.py"
-# the criterion dod_linear_rsr of the thesis scenario: its tolerance, and the DoDs of the line's ends and of
-# the point checked against it; the ends are DoD 0 and 1, so shape() walks the line by the DoD itself
-LINEAR_CRITERION = next(c for c in es.SC.reference.criteria if c["id"] == "dod_linear_rsr")
-LINEAR_TOL = LINEAR_CRITERION["tol"]
-LINE_LOW, LINE_MID, LINE_HIGH = LINEAR_CRITERION["points"]
+# issue 25's criterion of dod_linear_rsr: RSR(0.5) within 0.1 of the straight line from RSR(0) to RSR(1) (issue 31
+# reads "linearly related" as Pearson's r, docs/FIDELITY.md); the ends are DoD 0 and 1, so shape() walks the line
+# by the DoD itself
+LINEAR_TOL = 0.1
+LINE_LOW, LINE_MID, LINE_HIGH = 0.0, 0.5, 1.0
 
 
 def curve(o: dict, seeds: list[int], workers: int = 1) -> dict:

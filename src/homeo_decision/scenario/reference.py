@@ -21,8 +21,7 @@ Criterion kinds (labels: ``base`` or ``<sweep>=<value>``; metrics: ``HSR``, ``RS
 ``CEDA.all``, ...): ``below`` (at, metric, value), ``near`` (at, metric, value, tol),
 ``change_between`` (from, to, metric, lo, hi: lo < to - from < hi), ``decreases`` (from, to,
 metrics), ``same`` (a, b, metric: the 95% intervals overlap), ``first_below`` (sweep, metric, level,
-value, tol), ``linear`` (sweep, metric, points: [lo, mid, hi], tol), ``best_near`` (sweep, product:
-[metrics], value, tol). ``homeo_sim.report.fidelity`` evaluates them.
+value, tol), ``best_near`` (sweep, product: [metrics], value, tol), and issue 31's (``CRITERION_FIELDS``). ``homeo_sim.report.fidelity`` evaluates them.
 
 Everything but ``source`` is optional; a scenario without the block gets no comparison.
 """
@@ -104,7 +103,6 @@ CRITERION_FIELDS = {
     "decreases": ("from", "to", "metrics"),
     "same": ("a", "b", "metric"),
     "first_below": ("sweep", "metric", "level", "value", "tol"),
-    "linear": ("sweep", "metric", "points", "tol"),
     "best_near": ("sweep", "product", "value", "tol"),
     # issue 31 (homeo_sim.report.fidelity): labels may name part of a run, <label>@<a>-<b>
     "lowest_at": ("sweep", "metrics", "value", "tol"),  # the sum of the metrics is lowest near value
@@ -180,6 +178,4 @@ def _criterion(c: Any, drive_names: Sequence[str], ctx: str, text: tuple = _TEXT
     for k in ("span", "when"):
         if k in c and (not isinstance(c[k], list) or len(c[k]) != 2 or not all(map(_number, c[k]))):
             raise ScenarioError(f"{ctx}.{k} must be two iterations [from, to]")
-    if "points" in c and (not isinstance(c["points"], list) or len(c["points"]) != 3 or not all(map(_number, c["points"]))):
-        raise ScenarioError(f"{ctx}.points must be three numbers [low, middle, high]")
     return dict(c)
