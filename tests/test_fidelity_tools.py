@@ -228,3 +228,28 @@ def test_dod_shape_refuses_a_bad_change_on_one_line():
     proc = subprocess.run([sys.executable, str(TOOLS / "dod_shape.py"), "--seeds", "1-2", "--change", "tie_break=\"x\""],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1 and "tie_break" in proc.stderr
+
+
+# -- issue 31: tools/feature_claims.py ---------------------------------------------------------------------------
+
+def _features():
+    if str(TOOLS) not in sys.path:
+        sys.path.insert(0, str(TOOLS))
+    return importlib.import_module("feature_claims")
+
+
+def test_feature_claims_row_by_hand():
+    fc = _features()
+    x = {"mae": 0.052, "largest": "CEDA.NEng", "largest_error": 0.2, "HSR": 0.8, "RSR": 0.86, "pseudo_ratio": 1.031,
+         "RSR_xi": [0.29, 0.79, 0.86]}
+    assert fc.row("p", x) == "| p | 5.2% | CEDA NEng +20% | 0.800 | 0.860 | +3.1% | 0.29 / 0.79 / 0.86 | +0.07 |"
+
+
+def test_feature_claims_measures_a_short_run_and_refuses_bad_input_on_one_line():
+    fc = _features()
+    x = fc.measure(_es().current_open(), [0, 1], workers=1)
+    assert 0 < x["pseudo_ratio"] < 2 and len(x["RSR_xi"]) == 3 and x["RSR"] == x["RSR_xi"][2]
+    for args in (["--seeds", "9-3"], ["--change", "tie_break=\"x\""], ["--workers", "0"]):
+        proc = subprocess.run([sys.executable, str(TOOLS / "feature_claims.py"), *args], capture_output=True, text=True,
+                              timeout=120)
+        assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1, args

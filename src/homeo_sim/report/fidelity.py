@@ -8,8 +8,9 @@ reward noise (issue 25):
   More seeds only make our mean firmer. (``table_score`` also keeps, per number, whether it lies
   inside our 95% interval and the distance in half-widths, the score of issue 15: with more seeds
   the interval narrows and fewer numbers are "inside", so that count is not the score any more.)
-- the statements of the text about the sweeps (``criteria_score``: each statement's criterion, data
-  in ``reference.criteria``, written from the text): each is checked on every one of the disjoint
+- the statements of the text about its figures (``criteria_score``: each statement's criterion, data
+  in ``reference.criteria``, written from the text; a criterion may read part of a run, ``label_aggregates``):
+  each is checked on every one of the disjoint
   sets of ``SET_SIZE`` consecutive seeds (``seed_sets``), the size the criteria were written for;
   per statement, the share of sets on which it holds, and per set, how many statements hold.
 
