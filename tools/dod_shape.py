@@ -18,7 +18,7 @@ sys.path.insert(0, str(TOOLS))
 sys.path.insert(0, str(TOOLS.parent / "src"))
 
 import error_search as es  # noqa: E402
-from homeo_msgs_py.cli_args import Parser, int_at_least, run_command  # noqa: E402
+from homeo_msgs_py.cli_args import Parser, run_command  # noqa: E402
 from homeo_sim.report.fidelity import seed_sets  # noqa: E402
 from homeo_sim.runner import run_seeds  # noqa: E402
 from homeo_sim.sweep import SWEEPS  # noqa: E402
@@ -64,20 +64,13 @@ def report(label: str, c: dict, seeds: list[int]) -> list[str]:
 
 
 def build_parser() -> Parser:
-    ap = Parser(prog=PROG, description=__doc__.splitlines()[0])
-    ap.add_argument("--seeds", default="5000-5099", help="seeds A-B (default 5000-5099)")
-    ap.add_argument("--change", action="append", default=[], metavar="KEY=JSON[,KEY=JSON]",
-                    help="also the current default with these changes (repeat for several points)")
-    ap.add_argument("--workers", type=int_at_least(1), default=1)
-    return ap
+    return es.points_parser(PROG, __doc__, "5000-5099")
 
 
 def main(argv=None) -> int:
     def command() -> int:
         a = build_parser().parse_args(argv)
-        seeds = es.seeds_arg(a.seeds)
-        start = es.current_open()
-        points = [("current default", start)] + [(ch, {**start, **es.change_arg(ch, start)}) for ch in a.change]
+        seeds, points = es.points_of(a)
         print("| point | | " + " | ".join(f"DoD {d:g}" for d in SWEEPS["dod"])
               + " | RSR(0.5) - line (per set of 20) | largest departure |")
         print("|---|---|" + "---|" * (len(SWEEPS["dod"]) + 2))

@@ -343,6 +343,22 @@ def change_arg(spec: str, start: dict) -> dict:
     return out
 
 
+def points_parser(prog: str, doc: str, seeds: str) -> Parser:
+    """The command line of a tool that measures the current default and changes of it (dod_shape, feature_claims)."""
+    ap = Parser(prog=prog, description=doc.splitlines()[0])
+    ap.add_argument("--seeds", default=seeds, help=f"seeds A-B (default {seeds})")
+    ap.add_argument("--change", action="append", default=[], metavar="KEY=JSON[,KEY=JSON]",
+                    help="also the current default with these changes (repeat for several points)")
+    ap.add_argument("--workers", type=int_at_least(1), default=1)
+    return ap
+
+
+def points_of(a) -> tuple[list[int], list[tuple[str, dict]]]:
+    """The seeds and the points (label, open block) of a ``points_parser`` command line."""
+    start = current_open()
+    return seeds_arg(a.seeds), [("current default", start)] + [(ch, {**start, **change_arg(ch, start)}) for ch in a.change]
+
+
 def build_parser() -> Parser:
     ap = Parser(prog=PROG, description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="cmd", required=True, parser_class=Parser)

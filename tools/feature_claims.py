@@ -17,7 +17,7 @@ sys.path.insert(0, str(TOOLS))
 sys.path.insert(0, str(TOOLS.parent / "src"))
 
 import error_search as es  # noqa: E402
-from homeo_msgs_py.cli_args import Parser, int_at_least, run_command  # noqa: E402
+from homeo_msgs_py.cli_args import Parser, run_command  # noqa: E402
 from homeo_sim.report.fidelity import error_summary, relative_errors  # noqa: E402
 from homeo_sim.runner import run_seeds  # noqa: E402
 from homeo_sim.stats import aggregate  # noqa: E402
@@ -46,19 +46,13 @@ def row(label: str, x: dict) -> str:
 
 
 def build_parser() -> Parser:
-    ap = Parser(prog=PROG, description=__doc__.splitlines()[0])
-    ap.add_argument("--seeds", default="20000-20019", help="seeds A-B (default 20000-20019)")
-    ap.add_argument("--change", action="append", default=[], metavar="KEY=JSON[,KEY=JSON]",
-                    help="also the current default with these changes (repeat for several points)")
-    ap.add_argument("--workers", type=int_at_least(1), default=1)
-    return ap
+    return es.points_parser(PROG, __doc__, "20000-20019")
 
 
 def main(argv=None) -> int:
     def command() -> int:
         a = build_parser().parse_args(argv)
-        seeds, start = es.seeds_arg(a.seeds), es.current_open()
-        points = [("current default", start)] + [(ch, {**start, **es.change_arg(ch, start)}) for ch in a.change]
+        seeds, points = es.points_of(a)
         print("| point | MAE | largest | HSR | RSR | HSR with / without pseudo update | RSR at xi 0 / 0.5 / 1 | "
               "RSR(1) - RSR(0.5) |\n|---|---|---|---|---|---|---|---|")
         for label, o in points:
