@@ -26,29 +26,29 @@ def test_table_4_5_targets_over_20_seeds():
     assert proc.returncode == 0, proc.stderr
     m = json.loads(proc.stdout)["metrics"]
     assert m["HSR"]["mean"] >= 0.78
-    assert m["RSR"]["mean"] >= 0.85  # issue 2's target; seeds 0-19 give 0.853 (docs/FIDELITY.md; thesis 0.90)
+    assert m["RSR"]["mean"] >= 0.85  # issue 2's target; seeds 0-19 give 0.891 with issue 31's block (thesis 0.90)
     assert m["CEDA"]["all"]["mean"] <= 6.0
     assert m["CDA"]["NAch"]["mean"] <= 5.0
 
 
-def test_issue_25_table_goals_on_the_confirmation_seeds():
-    # issue 25: over 100 seeds that no search used (5000-5099, the confirmation of docs/FIDELITY.md), the mean
-    # absolute relative error of the 12 numbers of Table 4.5 at most 8%, each within 15%, HSR and RSR within 5%.
-    # Measured: 4.7%, the largest CEDA NRes -13.1% (CDA NEng -12.8%), HSR -2.4%, RSR -2.3%. (The statements on
-    # the five 20-seed sets, 9 of 10 on each, need the sweeps: homeo-sim report --seeds 100 --first-seed 5000.)
+def test_issue_31_table_goals_on_the_confirmation_seeds():
+    # issue 31: over 100 seeds that no search used (23000-23099, its confirmation, docs/FIDELITY.md), the mean
+    # absolute relative error of the 12 numbers of Table 4.5 at most 5%, each within 15%. Measured: 4.9%, the
+    # largest CEDA NEng +15.0%. On two sets measured afterwards CEDA NEng is past 15% (5000-5099: +15.3%,
+    # 24000-24099: +22.5%; MAE 4.5% and 4.8%): "each within 15%" holds on this set, not on every set. (The claims
+    # on the five 20-seed sets need the sweeps: homeo-sim report --seeds 100 --first-seed 23000.)
     from homeo_decision.scenario import load_scenario
-    from homeo_sim.report.fidelity import GOALS, error_summary, relative_errors
+    from homeo_sim.report.fidelity import error_summary, relative_errors
 
-    proc = subprocess.run([sys.executable, "-m", "homeo_sim.cli", "run", "--seeds", "100", "--first-seed", "5000",
+    proc = subprocess.run([sys.executable, "-m", "homeo_sim.cli", "run", "--seeds", "100", "--first-seed", "23000",
                            "--json", "--quiet"], capture_output=True, text=True, timeout=900)
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
-    assert out["seeds"] == list(range(5000, 5100))
+    assert out["seeds"] == list(range(23000, 23100))
     rows = relative_errors(out["metrics"], load_scenario().reference.metrics)
     e = error_summary(rows)
-    assert e["goals"] == {"mean_error": True, "each_error": True, "headline_error": True}, \
-        [(r["metric"], round(r["error"], 3)) for r in rows]
-    assert e["mean_abs_error"] <= GOALS["mean_error"]
+    assert e["mean_abs_error"] <= 0.05 and e["goals"]["each_error"], [(r["metric"], round(r["error"], 3)) for r in rows]
+    assert all(abs(x) <= 0.05 for x in e["headline_errors"].values())  # HSR -2.4%, RSR -4.3%
 
 
 def _mean(cfg: RunConfig, seeds=range(10)) -> dict:
@@ -66,8 +66,9 @@ def test_thesis_trends_over_10_seeds():
     assert x2["RSR"]["mean"] - x0["RSR"]["mean"] >= 0.20
     on, off = _mean(RunConfig()), _mean(RunConfig(pseudo_update=False))
     # issue 6 also asked a whole-run HSR gain of the pseudo update >= 0.05: not met (+0.037 over seeds 0-9 since
-    # issue 15's block), so it is no test here; homeo-sim report prints it among the thesis's statements, and
-    # docs/FIDELITY.md says why. What the thesis says of it, "especially in the early stage", is checked below.
+    # issue 15's block; issue 31 measured +3.0% over 23000-23099, the thesis says "about 10%"), so it is no test
+    # here: homeo-sim report counts it among the thesis's claims, and docs/FIDELITY.md says why. What the thesis
+    # says of it, "especially in the early stage", is checked below.
     assert on["HSR"]["mean"] > off["HSR"]["mean"]
     assert on["CDA"]["NAch"]["mean"] < off["CDA"]["NAch"]["mean"]
 

@@ -77,8 +77,6 @@ SWEEPS = {"dod": (0.0, 0.5, 1.0), "xi": (0.0, 2.0), "pseudo": (True, False)}
     (C("near", at="dod=0.0", metric="HSR", value=0.8, tol=0.1), False),
     (C("first_below", sweep="dod", metric="RSR", level=0.5, value=0.5, tol=0.1), True),  # first below at 0.5
     (C("first_below", sweep="dod", metric="RSR", level=0.5, value=0.2, tol=0.1), False),
-    (C("linear", sweep="dod", metric="RSR", points=[0.0, 0.5, 1.0], tol=0.1), True),  # 0.45 vs (0.95+0.05)/2
-    (C("linear", sweep="dod", metric="RSR", points=[0.0, 0.5, 1.0], tol=0.04), False),
     # HSR x RSR: 0.589 (0), 0.72 (base, 0.25), 0.405 (0.5), 0.0475 (1): best at the default's 0.25
     (C("best_near", sweep="dod", product=["HSR", "RSR"], value=0.2, tol=0.1), True),
     (C("best_near", sweep="dod", product=["HSR", "RSR"], value=0.5, tol=0.1), False),
@@ -88,9 +86,97 @@ def test_each_criterion_kind_by_hand(crit, holds):
     assert row["agrees"] is holds, row["ours"]
 
 
+def M_staged():
+    """M_fake with parts of runs (issue 31): early/late pseudo-update runs, two drives' CEDA, a mean curve."""
+    M = M_fake()
+    two = lambda a, b: {"CEDA": {"A": s(a, a - 1, a + 1), "B": s(b, b - 1, b + 1), "all": s((a + b) / 2, 0, 99)}}  # noqa: E731
+    M["pseudo=True@1000"] = agg(s(0.6, 0.55, 0.65), s(0.7, 0.6, 0.8)) | two(2.0, 4.0)
+    M["pseudo=False@1000"] = agg(s(0.3, 0.25, 0.35), s(0.6, 0.5, 0.7)) | two(10.0, 5.0)
+    M["base@curve"] = {"t": [10, 100, 200, 300, 1000], "RSR": [1.0, 0.6, 0.5, 0.55, 0.8],
+                       "HSR": [0.1, 0.3, 0.5, 0.6, 0.8], "CDA.NAch": [20.0, 15.0, 10.0, 5.0, 2.0]}
+    return M
+
+
+@pytest.mark.parametrize("crit, holds", [
+    (C("within", at="base", metrics=["HSR", "RSR"], lo=0.75, hi=0.95), True),  # 0.8 and 0.9
+    (C("within", at="base", metrics=["HSR", "RSR"], lo=0.85, hi=0.95), False),
+    (C("ratio", **{"from": "pseudo=False", "to": "pseudo=True"}, metric="HSR", lo=1.05, hi=1.15), True),  # 0.8 / 0.7
+    (C("ratio", **{"from": "pseudo=False", "to": "pseudo=True"}, metric="HSR", lo=1.15, hi=2.0), False),  # 1.143
+    # early gain 0.6 - 0.3 = 0.3 against the whole run's 0.8 - 0.7 = 0.1
+    (C("gain_larger", **{"from": "pseudo=False@1000", "to": "pseudo=True@1000", "than_from": "pseudo=False",
+                         "than_to": "pseudo=True"}, metric="HSR"), True),
+    (C("gain_larger", **{"from": "pseudo=False", "to": "pseudo=True", "than_from": "pseudo=False@1000",
+                         "than_to": "pseudo=True@1000"}, metric="HSR"), False),
+    # CEDA A falls 10 -> 2, B 5 -> 4: A's share 8 / 9
+    (C("mostly_from", **{"from": "pseudo=False@1000", "to": "pseudo=True@1000"}, metric="CEDA", drive="A", value=0.5), True),
+    (C("mostly_from", **{"from": "pseudo=False@1000", "to": "pseudo=True@1000"}, metric="CEDA", drive="A", value=0.9), False),
+    # HSR [0.69, 0.71] below [0.79, 0.81]; RSR [0.83, 0.87] below [0.88, 0.92]; CDA all [29, 31] vs [30.5, 32.5] overlap
+    (C("apart", lower=["pseudo=False"], higher=["pseudo=True"], metrics=["HSR", "RSR"]), True),
+    (C("apart", lower=["pseudo=True"], higher=["pseudo=False"], metrics=["CDA.all"]), False),
+    # DoD 0, 0.25 (base), 0.5, 1 against RSR 0.95, 0.9, 0.45, 0.05: r = -0.97467 (by hand)
+    (C("sweep_corr", sweep="dod", metric="RSR", lo=-1.0, hi=-0.97), True),
+    (C("sweep_corr", sweep="dod", metric="RSR", lo=-1.0, hi=-0.98), False),
+    # CEDA all over the DoD sweep: 4 (0), 4 (0.25), 4 (0.5), 4 (1): a tie goes to the first, DoD 0
+    (C("lowest_at", sweep="dod", metrics=["CEDA.all"], value=0.0, tol=0.0), True),
+    (C("lowest_at", sweep="dod", metrics=["HSR"], value=0.5, tol=0.1), False),  # HSR lowest at DoD 0
+    # the curve's HSR rises while CDA NAch falls: r = -0.97 over 10-1000; lowest RSR 0.5 at 200
+    (C("curve_corr", at="base", x="HSR", y="CDA.NAch", span=[10, 1000], lo=-1.0, hi=-0.5), True),
+    (C("curve_corr", at="base", x="HSR", y="RSR", span=[200, 1000], lo=-1.0, hi=-0.5), False),  # 0.5 -> 0.8: r > 0
+    (C("curve_min", at="base", metric="RSR", span=[10, 1000], value=0.6, when=[100, 300]), True),
+    (C("curve_min", at="base", metric="RSR", span=[10, 1000], value=0.6, when=[300, 1000]), False),
+    (C("curve_min", at="base", metric="RSR", span=[10, 100], value=0.6, when=[10, 1000]), False),  # 0.6 is not < 0.6
+    (C("all_of", parts=[{"kind": "below", "at": "xi=0.0", "metric": "RSR", "value": 0.4},
+                        {"kind": "within", "at": "base", "metrics": ["HSR"], "lo": 0.7, "hi": 0.9}]), True),
+    (C("all_of", parts=[{"kind": "below", "at": "xi=0.0", "metric": "RSR", "value": 0.4},
+                        {"kind": "within", "at": "base", "metrics": ["HSR"], "lo": 0.9, "hi": 1.0}]), False),
+])
+def test_each_issue_31_kind_by_hand(crit, holds):
+    (row,) = criteria_score([crit], M_staged(), SWEEPS, {"dod": 0.25})
+    assert row["agrees"] is holds, row["ours"]
+
+
+def test_a_stage_is_the_difference_of_running_sums_by_hand():
+    from homeo_sim.report.fidelity import label_aggregates
+
+    def st(n, ints, sat, sec, sums, excess):
+        return {"n": n, "intentions": ints, "satisfied": sat, "secure": sec, "sum": sums, "excess": excess}
+
+    # two seeds; after 10 and 20 ticks
+    runs = {"base": [{"stages": [st(10, 8, 2, 10, [50.0, 100.0], [50.0, 0.0]), st(20, 15, 9, 16, [80.0, 300.0], [80.0, 40.0])]},
+                     {"stages": [st(10, 10, 5, 5, [0.0, 100.0], [0.0, 0.0]), st(20, 20, 15, 15, [10.0, 200.0], [10.0, 0.0])]}]}
+    M = label_aggregates(runs, ["A", "B"], {"base@10-20", "base@10", "base@curve"})
+    late = M["base@10-20"]
+    # seed 1: 7 intentions, 7 served, 6 of 10 secure; A (80-50)/10, B (300-100)/10; seed 2: 10, 10, 10 of 10
+    assert late["HSR"]["per_seed"] == [1.0, 1.0] and late["RSR"]["per_seed"] == [0.6, 1.0]
+    assert late["CDA"]["A"]["per_seed"] == [3.0, 1.0] and late["CDA"]["B"]["per_seed"] == [20.0, 10.0]
+    assert late["CDA"]["all"]["per_seed"] == [11.5, 5.5] and late["CEDA"]["B"]["per_seed"] == [4.0, 0.0]
+    assert late["misses"]["per_seed"] == [0, 0] and late["insecure"]["per_seed"] == [4, 0]
+    early = M["base@10"]
+    assert early["HSR"]["per_seed"] == [0.25, 0.5] and early["misses"]["per_seed"] == [6, 5]
+    cur = M["base@curve"]  # per tick the mean over the seeds: HSR (0.25 + 0.5) / 2, (9/15 + 15/20) / 2
+    assert cur["t"] == [10, 20] and cur["HSR"] == pytest.approx([0.375, 0.675])
+    assert cur["CDA.A"] == pytest.approx([2.5, 2.25])
+    # a part of the run it has no running sums for: left out (a criterion reading it says it was not measured)
+    assert label_aggregates(runs, ["A", "B"], {"base@5-20", "base@10-30"}) == {}
+
+
+def test_a_run_keeps_its_running_sums_at_the_stage_marks():
+    from homeo_sim.metrics import stage_marks
+    from homeo_sim.runner import RunConfig, run_episode
+
+    assert stage_marks(250) == (10, 20, 30, 40, 50, 60, 70, 80, 90, 100, 200, 250)
+    assert stage_marks(5000)[-3:] == (4800, 4900, 5000) and stage_marks(5) == (5,)
+    r = run_episode(RunConfig(iterations=250, seed=1))
+    last = r.stages[-1]
+    assert [x["n"] for x in r.stages] == list(stage_marks(250))
+    # the last running sums are the run's metrics
+    assert last["satisfied"] / last["intentions"] == r.metrics["HSR"] and last["secure"] / 250 == r.metrics["RSR"]
+    assert last["sum"][0] / 250 == r.metrics["CDA"]["NAch"]
+
+
 def test_needed_labels_are_those_the_criteria_read():
     crits = [C("below", at="xi=0.0", metric="RSR", value=0.4),
-             C("linear", sweep="dod", metric="RSR", points=[0.0, 0.5, 1.0], tol=0.1),
+             C("sweep_corr", sweep="dod", metric="RSR", lo=-1.0, hi=-0.9),
              C("best_near", sweep="dod", product=["HSR", "RSR"], value=0.2, tol=0.1)]
     assert needed_labels(crits, SWEEPS) == {"base", "xi=0.0", "dod=0.0", "dod=0.5", "dod=1.0"}
 
@@ -157,10 +243,30 @@ def test_statement_shares_count_sets_by_hand():
 
 # -- the thesis scenario's criteria ---------------------------------------------------------
 
-def test_thesis_has_ten_criteria_one_per_statement_the_report_checks():
+def test_thesis_has_one_criterion_per_claim_of_sections_4_2_2_to_5():
+    # issue 31: every claim of Secs 4.2.2-4.2.5 and Chapter 5 about Figs 4.1-4.5 and Table 4.5, each once
     crit = load_scenario().reference.criteria
-    assert len(crit) == 10 and len({c["id"] for c in crit}) == 10
-    assert {c["figure"] for c in crit} == {"4.3", "4.4", "4.5"}
+    assert len(crit) == 30 and len({c["id"] for c in crit}) == 30
+    figs = {f.strip() for c in crit for f in c["figure"].split(",")}
+    assert {"4.1", "4.2", "4.3", "4.4", "4.5", "Table 4.5"} <= {f.rstrip("abcdef") for f in figs}
+
+
+def test_every_claim_is_quoted_in_fidelity_md_and_the_lists_agree():
+    """docs/FIDELITY.md's list of claims quotes each criterion's sentences, with its id; no id there that the
+    scenario lacks."""
+    import re
+    from pathlib import Path
+
+    doc = Path(__file__).resolve().parents[1].joinpath("docs", "FIDELITY.md").read_text()
+    part = doc[doc.index("### The complete list of claims"):]
+    part = part[:part.index("\n### ", 10)]
+    crit = load_scenario().reference.criteria
+    for c in crit:
+        quote = c["says"].rsplit(" (", 1)[0]
+        for piece in quote.split(" ... "):
+            assert piece in part, (c["id"], piece)
+        assert f"`{c['id']}`" in part, c["id"]
+    assert set(re.findall(r"^\| `(\w+)` \|", part, re.M)) == {c["id"] for c in crit}
 
 
 @pytest.mark.parametrize("change, words", [
@@ -169,13 +275,20 @@ def test_thesis_has_ten_criteria_one_per_statement_the_report_checks():
     (lambda c: c.pop("value"), ("exactly the fields",)),
     (lambda c: c.update(at="speed=3"), ("at", "speed=3")),
     (lambda c: c.update(value="low"), ("value", "number")),
+    (lambda c: c.update(at="base@late"), ("label", "base@late", "@<from>-<to>")),  # issue 31's parts of a run
+    (lambda c: c.update(at="base@500-100"), ("label", "base@500-100")),
+    (lambda c: c.update(kind="all_of", parts=[{"kind": "below", "at": "xi=0.0"}]) or [c.pop(k) for k in ("at", "metric", "value")],
+     ("parts[0]", "exactly the fields")),
+    (lambda c: c.update(kind="apart", lower=3, higher=["base"], metrics=["HSR"]) or [c.pop(k) for k in ("at", "metric", "value")],
+     ("lower", "list of labels")),
 ])
 def test_a_bad_criterion_is_one_line_error(thesis_raw, change, words):
     raw = copy.deepcopy(thesis_raw)
-    change(raw["reference"]["criteria"][0])
+    i = [c["id"] for c in raw["reference"]["criteria"]].index("xi0_insecure")  # a 'below' criterion
+    change(raw["reference"]["criteria"][i])
     with pytest.raises(ScenarioError) as e:
         scenario_from_dict(raw)
-    assert "\n" not in str(e.value) and "criteria[0]" in str(e.value)
+    assert "\n" not in str(e.value) and f"criteria[{i}]" in str(e.value)
     for w in words:
         assert w in str(e.value)
 

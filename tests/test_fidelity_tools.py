@@ -35,19 +35,20 @@ def _point(errors, met, text=0, n_sets=2):
 
 def test_the_objective_by_hand():
     es = _es()
-    # every error 5%: MAE 5 points; nothing beyond 15%; HSR, RSR at 5% (not beyond); 10 and 9 statements:
-    # 3 x 9.5 = 28.5, no shortfall; one text departure: -1
-    e = _point([0.05] * 12, [10, 9], text=1)
-    assert es.score(e) == pytest.approx(-5 + 28.5 - 1)
+    assert len(es.SC.reference.criteria) == 30  # issue 31's complete list: 90% is 27 on each set
+    # every error 5%: MAE 5 points; nothing beyond 15%; HSR, RSR at 5% (not beyond); 28 and 27 statements:
+    # 3 x 27.5 = 82.5, no shortfall; one text departure: -1
+    e = _point([0.05] * 12, [28, 27], text=1)
+    assert es.score(e) == pytest.approx(-5 + 82.5 - 1)
     # CEDA NEng at +35% (20 beyond 15: -40), RSR at -9% (4 beyond 5 and it is a headline rate: -16),
-    # sets 7 and 10 (mean 8.5: +25.5; shortfall 2 below 9: -6)
+    # sets 21 and 30 (mean 25.5: +76.5; shortfall 6 below 27: -18)
     errors = [0.0] * 12
     errors[10], errors[1] = 0.35, -0.09
-    e = _point(errors, [7, 10])
-    assert es.score(e) == pytest.approx(-100 * 0.44 / 12 - 40 - 16 + 25.5 - 6)
+    e = _point(errors, [21, 30])
+    assert es.score(e) == pytest.approx(-100 * 0.44 / 12 - 40 - 16 + 76.5 - 18)
     # statements not run (above the gate): as if none held on either set
     e = _point([0.0] * 12, None)
-    assert es.score(e) == pytest.approx(0 - 3 * 9 * 2)
+    assert es.score(e) == pytest.approx(0 - 3 * 27 * 2)
 
 
 def test_text_distance_adds_the_readings_of_issue_25():
@@ -56,6 +57,10 @@ def test_text_distance_adds_the_readings_of_issue_25():
     base = es.text_distance(start)
     assert es.text_distance({**start, "ongoing_effects": "every_tick"}) == base + 1
     assert es.text_distance({**start, "activation_boundary": "above", "drive_growth": {"NEng": "not_lowered"}}) == base + 2
+    # issue 31: Eq 3.19 for the pseudo reward and the serving drive to 0 depart from the text; the bonus only while
+    # m_dom is activated reads "when the robot has a dominant motivation" (free)
+    assert es.text_distance({**start, "pseudo_reward": "eq_3_19", "pseudo_serving": "satisfied"}) == base + 2
+    assert es.text_distance({**start, "motivation_bonus": "activated"}) == base
 
 
 def test_select_prefers_the_text_among_near_best_points():
@@ -170,8 +175,9 @@ def test_the_neighbourhood_by_hand():
     # way (4), proposal prob 0.8 +-0.1 (2); human_return_prob and on_leave_effects not while nobody leaves.
     # categoricals: serving_growth 2, reward_span, tie_break, value_max_over, metrics_sample 1 each, leave prob 4,
     # proposal choice 2, invalid_actions 1, always-valid 3, time_increase 1, growth NSoc 2, NRes 2, NEng 1,
-    # no_activated_motivation 1, ongoing_effects 1, activation_boundary 1
-    assert len(got) == 14 + 2 + 4 + 4 + 2 + 1 + 3 + 1 + 5 + 1 + 1 + 1 == 39
+    # no_activated_motivation 1, ongoing_effects 1, activation_boundary 1; issue 31's motivation_bonus,
+    # pseudo_reward, pseudo_serving 1 each
+    assert len(got) == 14 + 2 + 4 + 4 + 2 + 1 + 3 + 1 + 5 + 1 + 1 + 1 + 3 == 42
     for o in got:
         assert sum(o[k] != start[k] for k in es.SEARCHED) == 1
     assert sorted(o["initial_q"] for o in got if o["initial_q"] != start["initial_q"]) == [13, 14, 14.5, 15.5, 16, 17]
@@ -222,3 +228,28 @@ def test_dod_shape_refuses_a_bad_change_on_one_line():
     proc = subprocess.run([sys.executable, str(TOOLS / "dod_shape.py"), "--seeds", "1-2", "--change", "tie_break=\"x\""],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1 and "tie_break" in proc.stderr
+
+
+# -- issue 31: tools/feature_claims.py ---------------------------------------------------------------------------
+
+def _features():
+    if str(TOOLS) not in sys.path:
+        sys.path.insert(0, str(TOOLS))
+    return importlib.import_module("feature_claims")
+
+
+def test_feature_claims_row_by_hand():
+    fc = _features()
+    x = {"mae": 0.052, "largest": "CEDA.NEng", "largest_error": 0.2, "HSR": 0.8, "RSR": 0.86, "pseudo_ratio": 1.031,
+         "RSR_xi": [0.29, 0.79, 0.86]}
+    assert fc.row("p", x) == "| p | 5.2% | CEDA NEng +20% | 0.800 | 0.860 | +3.1% | 0.29 / 0.79 / 0.86 | +0.07 |"
+
+
+def test_feature_claims_measures_a_short_run_and_refuses_bad_input_on_one_line():
+    fc = _features()
+    x = fc.measure(_es().current_open(), [0, 1], workers=1)
+    assert 0 < x["pseudo_ratio"] < 2 and len(x["RSR_xi"]) == 3 and x["RSR"] == x["RSR_xi"][2]
+    for args in (["--seeds", "9-3"], ["--change", "tie_break=\"x\""], ["--workers", "0"]):
+        proc = subprocess.run([sys.executable, str(TOOLS / "feature_claims.py"), *args], capture_output=True, text=True,
+                              timeout=120)
+        assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1, args

@@ -135,10 +135,13 @@ def test_report_writes_pngs_and_markdown(tmp_path):
     assert len(data["checks"]) == 9 and all(isinstance(c["ok"], bool) for c in data["checks"])
     assert all(c["why"] for c in data["checks"] if not c["ok"])  # a failing check always says why
     res = json.loads((tmp_path / "results.json").read_text())
-    f = res["fidelity"]  # issue 15: the fidelity score, 12 numbers of Table 4.5 and the 10 statements
-    assert f["table_total"] == 12 and f["statements_total"] == 10 and len(res["statements"]) == 10
+    f = res["fidelity"]  # the fidelity score: 12 numbers of Table 4.5 and issue 31's 30 claims
+    assert f["table_total"] == 12 and f["statements_total"] == 30 and len(res["statements"]) == 30
     assert f["summary"].startswith("Table 4.5 over 2 seeds: mean |error| ") and f"**{f['summary']}.**" in md
-    assert f["summary"].endswith("statements per 2-seed set: %d of 10" % f["statements_per_set"][0])
+    assert f["summary"].endswith("statements per 2-seed set: %d of 30" % f["statements_per_set"][0])
+    # a run of 300 iterations has no iterations 4001-5000: the claims on that stage say so and do not hold
+    late = {st["id"]: st for st in res["statements"]}["still_growing"]
+    assert late["ours"] == "not measured: these runs have no base@4000-5000" and not late["agrees"]
     assert f["errors"]["mean_abs_error"] == pytest.approx(sum(abs(r["error"]) for r in f["table"]) / 12)
     assert f["table_inside"] == sum(r["inside"] for r in f["table"])
     assert all(st["of"] == 1 for st in res["statements"])  # two seeds: one set

@@ -18,17 +18,17 @@ sys.path.insert(0, str(TOOLS))
 sys.path.insert(0, str(TOOLS.parent / "src"))
 
 import error_search as es  # noqa: E402
-from homeo_msgs_py.cli_args import Parser, int_at_least, run_command  # noqa: E402
+from homeo_msgs_py.cli_args import Parser, run_command  # noqa: E402
 from homeo_sim.report.fidelity import seed_sets  # noqa: E402
 from homeo_sim.runner import run_seeds  # noqa: E402
 from homeo_sim.sweep import SWEEPS  # noqa: E402
 
 PROG = "dod_shape.py"
-# the criterion dod_linear_rsr of the thesis scenario: its tolerance, and the DoDs of the line's ends and of
-# the point checked against it; the ends are DoD 0 and 1, so shape() walks the line by the DoD itself
-LINEAR_CRITERION = next(c for c in es.SC.reference.criteria if c["id"] == "dod_linear_rsr")
-LINEAR_TOL = LINEAR_CRITERION["tol"]
-LINE_LOW, LINE_MID, LINE_HIGH = LINEAR_CRITERION["points"]
+# issue 25's criterion of dod_linear_rsr: RSR(0.5) within 0.1 of the straight line from RSR(0) to RSR(1) (issue 31
+# reads "linearly related" as Pearson's r, docs/FIDELITY.md); the ends are DoD 0 and 1, so shape() walks the line
+# by the DoD itself
+LINEAR_TOL = 0.1
+LINE_LOW, LINE_MID, LINE_HIGH = 0.0, 0.5, 1.0
 
 
 def curve(o: dict, seeds: list[int], workers: int = 1) -> dict:
@@ -64,20 +64,13 @@ def report(label: str, c: dict, seeds: list[int]) -> list[str]:
 
 
 def build_parser() -> Parser:
-    ap = Parser(prog=PROG, description=__doc__.splitlines()[0])
-    ap.add_argument("--seeds", default="5000-5099", help="seeds A-B (default 5000-5099)")
-    ap.add_argument("--change", action="append", default=[], metavar="KEY=JSON[,KEY=JSON]",
-                    help="also the current default with these changes (repeat for several points)")
-    ap.add_argument("--workers", type=int_at_least(1), default=1)
-    return ap
+    return es.points_parser(PROG, __doc__, "5000-5099")
 
 
 def main(argv=None) -> int:
     def command() -> int:
         a = build_parser().parse_args(argv)
-        seeds = es.seeds_arg(a.seeds)
-        start = es.current_open()
-        points = [("current default", start)] + [(ch, {**start, **es.change_arg(ch, start)}) for ch in a.change]
+        seeds, points = es.points_of(a)
         print("| point | | " + " | ".join(f"DoD {d:g}" for d in SWEEPS["dod"])
               + " | RSR(0.5) - line (per set of 20) | largest departure |")
         print("|---|---|" + "---|" * (len(SWEEPS["dod"]) + 2))

@@ -15,16 +15,18 @@ OUT/study.db; a database server for drivers on several machines): started again,
 where it stopped (a trial whose driver died is retried), and --parallel-trials K evaluates K trials at once.
 
 What one evaluation runs (5000 iterations each): the default run on the table seeds (the 12 numbers:
-the relative error of our mean), and on the statement seeds, in sets of 20, the runs the ten criteria
-read (xi 0 and 2, no pseudo update, the DoD grid; the search's grid stops at 0.6 plus 1, as issue 15's
-did). A point whose mean absolute error exceeds ``--gate`` is not run on the statements (it scores as if
-none held): it cannot reach the goals, and the statements cost eleven times the table.
+the relative error of our mean), and on the statement seeds, in sets of 20, the runs the criteria read
+(``NEEDED``: issue 31's complete list reads the xi sweep's points, no pseudo update and the whole DoD grid,
+and parts of runs through their running sums). A point whose mean absolute error exceeds ``--gate`` is not
+run on the statements (it scores as if none held): it cannot reach the goals, and the statements cost
+eighteen times the table. ``search --issue31`` starts from the block and one change at a time (``HINTS_31``)
+and leaves issue 25's costly readings as they are (``FIXED_31``).
 
 The objective (maximised; the goals are those of issue 25, ``fidelity.GOALS``), in percentage points:
 
     score = - 100 x mean |error| - 2 x (sum of each number's |error| beyond 15%)
             - 4 x (sum of HSR's and RSR's |error| beyond 5%)
-            + 3 x (statements met, mean over the sets) - 3 x (sum over the sets of the shortfall below 9)
+            + 3 x (statements met, mean over the sets) - 3 x (sum over the sets of the shortfall below 90%)
             - W_TEXT x (departures from the text's literal reading)
 """
 
@@ -42,24 +44,27 @@ sys.path.insert(0, str(TOOLS.parent / "src"))
 
 import joint_search as j  # noqa: E402
 from homeo_msgs_py.cli_args import Parser, UserError, float_in, int_at_least, run_command  # noqa: E402
-from homeo_sim.report.fidelity import (GOALS, error_summary, relative_errors, seed_sets, set_aggregates,  # noqa: E402
-                                       statement_shares, statements_goal_met)
+from homeo_sim.report.fidelity import (GOALS, error_summary, needed_labels, relative_errors, seed_sets,  # noqa: E402
+                                       set_aggregates, statement_shares, statements_goal_met)
 from homeo_sim.parallel import Pool, add_cluster_argument  # noqa: E402
 from homeo_sim.runner import run_seeds  # noqa: E402
 from homeo_sim.stats import aggregate  # noqa: E402
-from homeo_sim.sweep import SWEEPS  # noqa: E402
+from homeo_sim.sweep import SWEEPS, point_config  # noqa: E402
 
 PROG = "error_search.py"
 SC, DRIVES = j.SC, j.DRIVES
-# issue 15's searched choices and issue 25's readings of the energy drive and of the activation boundary
-SEARCHED = j.SEARCHED + ("ongoing_effects", "activation_boundary")
+# issue 15's searched choices, issue 25's readings of the energy drive and of the activation boundary, and issue
+# 31's readings of the motivation factor and the pseudo update
+ISSUE_31 = {"motivation_bonus": ("dominant", "activated"), "pseudo_reward": ("eq_3_20", "eq_3_19"),
+            "pseudo_serving": ("praise", "satisfied")}
+SEARCHED = j.SEARCHED + ("ongoing_effects", "activation_boundary") + tuple(ISSUE_31)
 # issue 15's space, widened where its best points sat at an end (a busier human, a higher initial Q value,
 # more absences), NEng's growth and issue 25's readings added; neighbours move the initial Q value and how
 # busy the human is by more than one grid step
 SPACE = j.Space(searched=SEARCHED, initial_q=(-5.0, 25.0), no_intention=(0.05, 0.8),
                 leave_probs=(0.0, 0.02, 0.05, 0.1, 0.2),
                 growth={**j.GROWTH_SEARCH, "NEng": ["always", "not_lowered"]},
-                extra={"ongoing_effects": ("actions", "every_tick"), "activation_boundary": ("eq_3_2", "above")},
+                extra={"ongoing_effects": ("actions", "every_tick"), "activation_boundary": ("eq_3_2", "above"), **ISSUE_31},
                 steps={"initial_q": (1, 2, 4), "human_no_intention_prob": (1, 2)})
 DOD_SEARCH = j.DOD_SEARCH
 W_EACH, W_HEAD, W_MET, W_SHORT, W_TEXT = 2.0, 4.0, 3.0, 3.0, 1.0
@@ -70,7 +75,8 @@ def text_distance(o: dict) -> int:
     """Issue 15's count (joint_search.text_distance) plus the readings of issue 25: charging on every tick
     at the charger departs from Table 4.1's rows, a drive at its threshold left inactive from Eq 3.2."""
     return j.text_distance(o) + (o.get("ongoing_effects", "actions") != "actions") \
-        + (o.get("activation_boundary", "eq_3_2") != "eq_3_2")
+        + (o.get("activation_boundary", "eq_3_2") != "eq_3_2") + (o.get("pseudo_reward", "eq_3_20") != "eq_3_20") \
+        + (o.get("pseudo_serving", "praise") != "praise")  # motivation_bonus: "when the robot has a dominant motivation"
 
 
 def current_open() -> dict:
@@ -89,7 +95,12 @@ def params(o: dict) -> dict:
 
 # -- one evaluation ---------------------------------------------------------------------------------
 
-def evaluate(o: dict, table_seeds: list[int], statement_seeds: list[int], dods=DOD_SEARCH, workers: int = 1,
+def _kept(r) -> dict:
+    """A run's metrics and its running sums (the criteria read parts of runs)."""
+    return r.metrics | {"stages": r.stages}
+
+
+def evaluate(o: dict, table_seeds: list[int], statement_seeds: list[int], dods=SWEEPS["dod"], workers: int = 1,
              gate: float | None = GATE) -> dict:
     """The 12 relative errors over ``table_seeds``, the criteria on each set of 20 of ``statement_seeds``
     (not run when the mean absolute error is above ``gate``)."""
@@ -103,7 +114,7 @@ def evaluate_table(o: dict, table_seeds: list[int], statement_seeds: list[int], 
     """The default run on ``table_seeds``: the 12 relative errors; the statements still to run (scored as
     none held until ``add_statements``)."""
     cfg = j._configs(o, ())["base"]
-    per_seed = dict(zip(table_seeds, [r.metrics for r in run_seeds(cfg, table_seeds, workers)]))
+    per_seed = dict(zip(table_seeds, [_kept(r) for r in run_seeds(cfg, table_seeds, workers)]))
     rows = relative_errors(aggregate(list(per_seed.values()), DRIVES), SC.reference.metrics)
     errors = error_summary(rows)
     e = {"open": o, "errors": {r["metric"]: r["error"] for r in rows}, "mae": errors["mean_abs_error"],
@@ -115,21 +126,31 @@ def evaluate_table(o: dict, table_seeds: list[int], statement_seeds: list[int], 
     return e
 
 
-def add_statements(e: dict, statement_seeds: list[int], dods=DOD_SEARCH, workers: int = 1) -> dict:
+NEEDED = needed_labels(SC.reference.criteria, SWEEPS)  # the labels the criteria read, parts of runs included
+
+
+def configs(o: dict, dods=SWEEPS["dod"]) -> dict:
+    """The runs the criteria read (``NEEDED``; the DoD sweep over ``dods``), by label."""
+    base = j._configs(o, ())["base"]
+    labs = {lab.partition("@")[0] for lab in NEEDED if not lab.startswith("dod=")} | {f"dod={v}" for v in dods}
+    return {lab: base if lab == "base" else point_config(lab.split("=")[0], lab.endswith("True") if lab.startswith(
+        "pseudo=") else float(lab.split("=")[1]), base) for lab in sorted(labs)}
+
+
+def add_statements(e: dict, statement_seeds: list[int], dods=SWEEPS["dod"], workers: int = 1) -> dict:
     """The criteria on each set of 20 of ``statement_seeds`` for the point ``e`` of ``evaluate_table``."""
     o, per_seed = e["open"], e.pop("_base", {})
-    cfgs = j._configs(o, dods)
+    cfgs = configs(o, dods)
     runs = {}
     for lab, cfg in cfgs.items():
-        if lab == "base":
+        if cfg == cfgs["base"]:  # the default run: xi 1 and the pseudo update on are it
             missing = [s for s in statement_seeds if s not in per_seed]
             if missing:
-                per_seed.update(zip(missing, [r.metrics for r in run_seeds(cfg, missing, workers)]))
+                per_seed.update(zip(missing, [_kept(r) for r in run_seeds(cfg, missing, workers)]))
             runs[lab] = [per_seed[s] for s in statement_seeds]
         else:
-            runs[lab] = [r.metrics for r in run_seeds(cfg, statement_seeds, workers)]
-    runs["pseudo=True"] = runs["base"]  # the default run has the pseudo update on
-    M_sets = set_aggregates(runs, DRIVES)
+            runs[lab] = [_kept(r) for r in run_seeds(cfg, statement_seeds, workers)]
+    M_sets = set_aggregates(runs, DRIVES, NEEDED)
     sh = statement_shares(SC.reference.criteria, M_sets, {**SWEEPS, "dod": tuple(dods)}, {"dod": cfgs["base"].dod})
     e.update(met_per_set=sh["met_per_set"], shares={x["id"]: x["held"] for x in sh["shares"]}, n_sets=len(M_sets))
     e["goals"]["statements_per_set"] = statements_goal_met(e["met_per_set"], len(SC.reference.criteria))
@@ -174,6 +195,17 @@ def diff(o: dict, ref: dict) -> str:
 # charging at the charger on every tick moved CDA NEng to the thesis's; a busier human raised NSoc and NRes
 HINTS = ({}, {"ongoing_effects": "every_tick"}, {"ongoing_effects": "every_tick", "human_no_intention_prob": 0.2},
          {"ongoing_effects": "every_tick", "human_no_intention_prob": 0.2, "tie_break": "last"})
+# issue 31: the block of issue 25, then one change at a time: the readings of the motivation factor and the
+# pseudo update, and the choices that moved the two features' claims most in a first look (docs/FIDELITY.md)
+HINTS_31 = ({}, {"motivation_bonus": "activated"}, {"pseudo_reward": "eq_3_19"}, {"pseudo_serving": "satisfied"},
+            {"scold_drive_change": 4.0}, {"scold_drive_change": 6.0}, {"human_proposal_prob": 1.0}, {"initial_q": 12.0},
+            {"reward_span": "iteration"}, {"human_no_intention_prob": 0.3}, {"serving_growth": "expressed"},
+            {"tie_break": "first"}, {"value_max_over": "all"}, {"metrics_sample": "end"})
+# issue 31's search leaves these at the block's values: issue 25's one-at-a-time tables show each costs the table
+# far more than it could give (docs/FIDELITY.md)
+FIXED_31 = ("ongoing_effects", "activation_boundary", "drive_growth", "time_increase", "invalid_actions",
+            "always_valid_actions", "human_leave_prob", "human_return_prob", "on_leave_effects",
+            "no_activated_motivation", "human_proposal_choice")
 
 
 def study_of(storage: str, sampler_seed: int):
@@ -195,7 +227,8 @@ def study_of(storage: str, sampler_seed: int):
 
 
 def search(trials: int, table_seeds: list[int], statement_seeds: list[int], out: Path, sampler_seed: int,
-           workers, gate: float, storage: str | None = None, parallel: int = 1) -> list[dict]:
+           workers, gate: float, storage: str | None = None, parallel: int = 1, hints=HINTS,
+           fixed: tuple = ()) -> list[dict]:
     """``trials`` trials in all, counting those the study in ``storage`` already completed."""
     import optuna
 
@@ -205,7 +238,7 @@ def search(trials: int, table_seeds: list[int], statement_seeds: list[int], out:
     study = study_of(storage or f"sqlite:///{(out / 'study.db').resolve()}", sampler_seed)
     resumed = bool(study.trials)
     if not resumed:
-        for hint in HINTS:
+        for hint in hints:
             study.enqueue_trial(params({**start, **hint}))
     done = sum(t.state == optuna.trial.TrialState.COMPLETE for t in study.trials)
     if resumed:
@@ -213,7 +246,8 @@ def search(trials: int, table_seeds: list[int], statement_seeds: list[int], out:
               file=sys.stderr, flush=True)
     with (out / "trials.jsonl").open("a" if resumed else "w") as log:
         def objective(trial):
-            e = evaluate(suggest(trial, start), table_seeds, statement_seeds, workers=workers, gate=gate)
+            o = suggest(trial, start) | {k: start[k] for k in fixed}
+            e = evaluate(o, table_seeds, statement_seeds, workers=workers, gate=gate)
             e.pop("_base", None)
             e["trial"] = trial.number
             evals.append(e)
@@ -341,6 +375,22 @@ def change_arg(spec: str, start: dict) -> dict:
     return out
 
 
+def points_parser(prog: str, doc: str, seeds: str) -> Parser:
+    """The command line of a tool that measures the current default and changes of it (dod_shape, feature_claims)."""
+    ap = Parser(prog=prog, description=doc.splitlines()[0])
+    ap.add_argument("--seeds", default=seeds, help=f"seeds A-B (default {seeds})")
+    ap.add_argument("--change", action="append", default=[], metavar="KEY=JSON[,KEY=JSON]",
+                    help="also the current default with these changes (repeat for several points)")
+    ap.add_argument("--workers", type=int_at_least(1), default=1)
+    return ap
+
+
+def points_of(a) -> tuple[list[int], list[tuple[str, dict]]]:
+    """The seeds and the points (label, open block) of a ``points_parser`` command line."""
+    start = current_open()
+    return seeds_arg(a.seeds), [("current default", start)] + [(ch, {**start, **change_arg(ch, start)}) for ch in a.change]
+
+
 def build_parser() -> Parser:
     ap = Parser(prog=PROG, description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="cmd", required=True, parser_class=Parser)
@@ -355,6 +405,7 @@ def build_parser() -> Parser:
     s.add_argument("--storage", metavar="URL", default=None,
                    help="the Optuna study's RDB URL (default: sqlite:///OUT/study.db); a database server for several drivers")
     s.add_argument("--parallel-trials", type=int_at_least(1), default=1, metavar="K", help="trials evaluated at once")
+    s.add_argument("--issue31", action="store_true", help="issue 31's hints (one change at a time) and fixed choices")
     v = sub.add_parser("validate", help="the best distinct trials of a search on seeds of their own")
     v.add_argument("--from", dest="trials_file", required=True, metavar="TRIALS.jsonl")
     v.add_argument("--best", type=int_at_least(1), default=8)
@@ -385,7 +436,7 @@ def main(argv=None) -> int:
         if a.cmd == "search":
             t_seeds, s_seeds = seeds_arg(a.search_seeds), seeds_arg(a.statement_seeds)
             search(a.trials, t_seeds, s_seeds, Path(a.out), a.sampler_seed, a.workers, a.gate, a.storage,
-                   a.parallel_trials)
+                   a.parallel_trials, *((HINTS_31, FIXED_31) if a.issue31 else (HINTS, ())))
             return 0
         if a.cmd == "refine":
             t_seeds, s_seeds = seeds_arg(a.search_seeds), seeds_arg(a.statement_seeds)

@@ -47,6 +47,13 @@ class Perceiving:
         self.none_state = sc.none_state
         self.stim = sc.c.stim
         self.valid = sc.c.valid
+        self.bonus_activated = sc.open.motivation_bonus == "activated"
+
+    def bonus_drive(self, p: Percept) -> int:
+        """Eq 3.21's k: the drive of m_dom; under the open choice motivation_bonus = activated, none (-1)
+        while m_dom is not activated (Definition 6: its intensity is 0)."""
+        m = p.m_dom
+        return m if not self.bonus_activated or (m < len(p.intensities) and p.intensities[m] > 0.0) else -1
 
     def _states(self, m_dom: int, code: int) -> tuple:
         return ()
@@ -146,12 +153,14 @@ class DecisionCore(Perceiving):
         """Lines 19-24: the Object-Q update (Eq 3.14) and, for a proposal, the pseudo update (Eq 3.23)."""
         alpha = self.phase(t).alpha
         fb = feedback if self.feedback else 0
-        r = reward(p.drives, after, self.weights, p.m_dom, self.xi, fb, self.f)
+        k = self.bonus_drive(p)
+        r = reward(p.drives, after, self.weights, k, self.xi, fb, self.f)
         self.q.update(action, p.states, r, p_next.states, alpha, self.gamma, p.code, p_next.code)
         r_dag = None
         if self.pseudo_update and self.feedback and proposal is not None and proposal != action:
-            d_dag = pseudo_drives(p.drives, self.serving, self.praise)
-            r_dag = drive_reward(p.drives, d_dag, self.weights, p.m_dom, self.xi)
+            o = self.sc.open
+            d_dag = pseudo_drives(p.drives, self.serving, self.praise if o.pseudo_serving == "praise" else -100.0)
+            r_dag = drive_reward(p.drives, d_dag, self.weights, k if o.pseudo_reward == "eq_3_20" else -1, self.xi)
             # s+ differs from s only in m_dom, from the pseudo drives and unchanged stimuli
             m_dag = motivational_state(d_dag, self.thresholds, self.stim[p.code], self.tie_break, self.none_state)[1]
             s_dag = self.q.states(m_dag, p.code)

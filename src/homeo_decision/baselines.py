@@ -66,7 +66,7 @@ class _Perceiving(Perceiving):
 
     def learn(self, p: Percept, action: int, after: Sequence[float], feedback: int, proposal: int | None,
               p_next: Percept, t: int) -> Learned:
-        return Learned(reward(p.drives, after, self.weights, p.m_dom, self.xi, feedback, self.f), None)
+        return Learned(reward(p.drives, after, self.weights, self.bonus_drive(p), self.xi, feedback, self.f), None)
 
 
 class RandomPolicy(_Perceiving):
@@ -193,7 +193,7 @@ class FlatQ(_Perceiving):
               p_next: Percept, t: int) -> Learned:
         """Eq 2.9: Q(s, a) <- (1 - alpha) Q(s, a) + alpha (r + gamma max_a' Q(s', a'))."""
         alpha = phase_at(self.schedule, t).alpha
-        r = reward(p.drives, after, self.weights, p.m_dom, self.xi, feedback, self.f)
+        r = reward(p.drives, after, self.weights, self.bonus_drive(p), self.xi, feedback, self.f)
         row = self.q[p.states[0]]
         row[action] = (1.0 - alpha) * row[action] + alpha * (r + self.gamma * self.value(p_next.states[0], p_next.code))
         return Learned(r, None)

@@ -60,7 +60,7 @@ def evaluate(run: RecordedRun, q_table: str, learning: dict | None = None) -> di
         if nxt is None or (nxt.get("outcome") or {}).get("action") != a_name:
             continue
         after = nxt.get("after_action") if span_action and nxt.get("after_action") else nxt["drives"]
-        r = reward(p.drives, [after[d] for d in sc.drive_names], core.weights, p.m_dom, core.xi,
+        r = reward(p.drives, [after[d] for d in sc.drive_names], core.weights, core.bonus_drive(p), core.xi,
                    nxt["outcome"]["feedback"], core.f)
         n_r += 1
         r_sum += r

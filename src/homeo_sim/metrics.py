@@ -21,8 +21,11 @@ class MetricRecorder:
     tick order give bit for bit what ``summarize`` computes over the whole arrays (numpy sums a
     column of a C-ordered array row by row). ``keep=True`` also keeps every tick (``series``)."""
 
-    def __init__(self, drive_names: Sequence[str], thresholds: Sequence[float], keep: bool = False):
+    def __init__(self, drive_names: Sequence[str], thresholds: Sequence[float], keep: bool = False,
+                 marks: Sequence[int] = ()):
         self.drive_names = list(drive_names)
+        # the running sums after each of these ticks (``stages``: the metrics over part of a run)
+        self._marks, self.stages = list(marks)[::-1], []
         self.thresholds = [float(x) for x in thresholds]
         self._n = self._n_int = self._n_sat = self._n_secure = 0
         self._sum = [0.0] * len(self.drive_names)
@@ -45,6 +48,9 @@ class MetricRecorder:
         self._n_secure += secure
         self._n_int += bool(expressed)
         self._n_sat += bool(satisfied)
+        if self._marks and self._n == self._marks[-1]:
+            self._marks.pop()
+            self.stages.append(self.state())
         if self._keep:
             self._drives.extend(drives)
             self._expressed.append(expressed)
@@ -118,6 +124,11 @@ class MetricRecorder:
             sums.append([float(x) for x in v])
         self._n, self._n_int, self._n_sat, self._n_secure = counts
         self._sum, self._excess = sums
+
+
+def stage_marks(n: int) -> tuple:
+    """The ticks after which a run keeps its running sums: every 10 up to 100, then every 100, and the last."""
+    return tuple(sorted({t for t in (*range(10, 101, 10), *range(200, n, 100)) if t < n} | {n}))
 
 
 def summarize(drives: np.ndarray, expressed: np.ndarray, satisfied: np.ndarray, names, thresholds) -> dict:

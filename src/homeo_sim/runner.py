@@ -22,7 +22,7 @@ from homeo_msgs_py.graph import BAYES, ORACLE
 from homeo_msgs_py.learning import DOD, PSEUDO_UPDATE, XI
 
 from .environment import SimEnvironment
-from .metrics import MetricRecorder, accuracy_ends
+from .metrics import MetricRecorder, accuracy_ends, stage_marks
 from .parallel import keeps, parallel_map
 
 
@@ -60,6 +60,7 @@ class EpisodeResult:
     load_report: object | None = None
     actions: list = field(default_factory=list)
     intention_hits: list | None = None  # bayes mode: per tick, recognised intention == the human's true one
+    stages: list = field(default_factory=list)  # the metrics' running sums after the ticks of stage_marks
 
 
 def build_scenario(cfg: RunConfig) -> Scenario:
@@ -102,8 +103,8 @@ class Simulation:
             keep_actions: bool = False) -> EpisodeResult:
         sc, robot = self.sc, self.robot
         # d(t) of the metrics: after the whole iteration, or before the time increase (open choice)
-        rec = MetricRecorder(sc.drive_names, [d.threshold for d in sc.drives], keep=self.cfg.series).follow(
-            robot.perception, sc.open.metrics_sample == "after_action")
+        rec = MetricRecorder(sc.drive_names, [d.threshold for d in sc.drives], keep=self.cfg.series,
+                             marks=stage_marks(iterations)).follow(robot.perception, sc.open.metrics_sample == "after_action")
         record = rec.on_tick
         bayes = self.cfg.intention == BAYES
         actions: list = []
@@ -127,7 +128,7 @@ class Simulation:
         if bayes:
             metrics["intention_accuracy"] = accuracy_ends(hits)
         return EpisodeResult(self.cfg.seed, metrics, rec.series() if self.cfg.series else None, self.load_report,
-                             actions, hits if bayes else None)
+                             actions, hits if bayes else None, rec.stages)
 
 
 def make_recognition_of(sc: Scenario, cfg: RunConfig):

@@ -124,7 +124,7 @@ def run_job(cfg: RunConfig, curves: bool = False) -> JobResult:
     drives = np.column_stack([s["drives"][n] for n in sc.drive_names])
     secure = (drives < INSECURE).all(axis=1)
     w_hsr, w_rsr = window_rates(s["expressed"], s["satisfied"], secure, LEARNING_WINDOW)
-    out = JobResult(cfg.seed, res.metrics, learning_speed(w_hsr, w_rsr))
+    out = JobResult(cfg.seed, res.metrics, learning_speed(w_hsr, w_rsr), extra={"stages": res.stages})
     ctl = getattr(sim.policy, "controller", None)
     if ctl is not None:
         out.extra["dod_final"] = ctl.dod

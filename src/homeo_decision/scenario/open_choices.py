@@ -160,6 +160,14 @@ class OpenChoices:
                                   "(Table 4.1's charging): only through the actions whose own effects say so, "
                                   "or on every tick that starts and ends in that state whatever the action "
                                   "(a drive the action changes is not changed twice)", late=True)
+    motivation_bonus: str = choice("dominant", OneOf("dominant", "activated"), "Eq 3.20's bonus (1 + xi) goes to "
+                                   "the drive of m_dom whatever its intensity, or only when m_dom is activated "
+                                   "(Definition 6: intensity > 0)", late=True)
+    pseudo_reward: str = choice("eq_3_20", OneOf("eq_3_20", "eq_3_19"), "r+_drives of Eq 3.23: by Eq 3.20 (with "
+                                "the motivation factor) or by Eq 3.19 (without it)", late=True)
+    pseudo_serving: str = choice("praise", OneOf("praise", "satisfied"), "the serving drive in the pseudo new "
+                                 "state (Sec 3.2.6, approximation 1): moved as a praise moves it, or to 0 (the "
+                                 "need met)", late=True)
     intention_threshold: float = choice(0.0, Between(0.0, 1.0), "below this posterior the recognised "
                                         "intention is none (docs/INTENTION.md)")
     intention_prior_strength: float = choice(10.0, Between(0.0, 1e6), "textbook observations each prior CPD "

@@ -21,8 +21,7 @@ Criterion kinds (labels: ``base`` or ``<sweep>=<value>``; metrics: ``HSR``, ``RS
 ``CEDA.all``, ...): ``below`` (at, metric, value), ``near`` (at, metric, value, tol),
 ``change_between`` (from, to, metric, lo, hi: lo < to - from < hi), ``decreases`` (from, to,
 metrics), ``same`` (a, b, metric: the 95% intervals overlap), ``first_below`` (sweep, metric, level,
-value, tol), ``linear`` (sweep, metric, points: [lo, mid, hi], tol), ``best_near`` (sweep, product:
-[metrics], value, tol). ``homeo_sim.report.fidelity`` evaluates them.
+value, tol), ``best_near`` (sweep, product: [metrics], value, tol), and issue 31's (``CRITERION_FIELDS``). ``homeo_sim.report.fidelity`` evaluates them.
 
 Everything but ``source`` is optional; a scenario without the block gets no comparison.
 """
@@ -99,15 +98,26 @@ CRITERION_FIELDS = {
     "decreases": ("from", "to", "metrics"),
     "same": ("a", "b", "metric"),
     "first_below": ("sweep", "metric", "level", "value", "tol"),
-    "linear": ("sweep", "metric", "points", "tol"),
     "best_near": ("sweep", "product", "value", "tol"),
+    # issue 31 (homeo_sim.report.fidelity): labels may name part of a run, <label>@<a>-<b>
+    "lowest_at": ("sweep", "metrics", "value", "tol"),  # the sum of the metrics is lowest near value
+    "sweep_corr": ("sweep", "metric", "lo", "hi"),  # lo <= Pearson r(metric, swept value) <= hi
+    "within": ("at", "metrics", "lo", "hi"),  # each metric in [lo, hi]
+    "ratio": ("from", "to", "metric", "lo", "hi"),  # lo <= to / from <= hi
+    "gain_larger": ("from", "to", "than_from", "than_to", "metric"),  # to - from > than_to - than_from
+    "mostly_from": ("from", "to", "metric", "drive", "value"),  # the drive's share of CDA/CEDA's fall > value
+    "apart": ("lower", "higher", "metrics"),  # each lower label's 95% interval below each higher one's
+    "curve_corr": ("at", "x", "y", "span", "lo", "hi"),  # Pearson r of two mean curves over [from, to]
+    "curve_min": ("at", "metric", "span", "value", "when"),  # a curve's lowest point in span: < value, inside when
+    "all_of": ("parts",),  # each part holds (a part: a criterion without id, figure, says, criterion)
 }
 _SWEEPS = SWEEP_NAMES
-_LABEL_FIELDS, _METRIC_FIELDS = ("at", "from", "to", "a", "b"), ("metric",)
+_LABEL_FIELDS, _METRIC_FIELDS = ("at", "from", "to", "a", "b", "than_from", "than_to"), ("metric", "x", "y")
+_TEXT_FIELDS = ("id", "figure", "says", "criterion")
 
 
 def _metric_ok(m: Any, drive_names: Sequence[str]) -> bool:
-    if m in ("HSR", "RSR"):
+    if m in ("HSR", "RSR", "misses", "insecure"):
         return True
     if not isinstance(m, str) or m.count(".") != 1:
         return False
@@ -116,30 +126,41 @@ def _metric_ok(m: Any, drive_names: Sequence[str]) -> bool:
 
 
 def _label_ok(lab: Any) -> bool:
-    if lab == "base":
-        return True
-    if not isinstance(lab, str) or "=" not in lab:
+    if not isinstance(lab, str):
         return False
-    sw, v = lab.split("=", 1)
-    return sw in _SWEEPS
+    lab, at, st = lab.partition("@")
+    a, dash, b = st.partition("-")
+    if at and not (st == "curve" or (b if dash else a).isdigit() and (not dash or a.isdigit() and int(a) < int(b))):
+        return False
+    return lab == "base" or ("=" in lab and lab.split("=", 1)[0] in _SWEEPS)
 
 
-def _criterion(c: Any, drive_names: Sequence[str], ctx: str) -> dict:
+def _criterion(c: Any, drive_names: Sequence[str], ctx: str, text: tuple = _TEXT_FIELDS) -> dict:
     if not isinstance(c, dict):
         raise ScenarioError(f"{ctx} must be an object")
     kind = c.get("kind")
     if kind not in CRITERION_FIELDS:
         raise ScenarioError(f"{ctx}.kind = {kind!r} must be one of {sorted(CRITERION_FIELDS)}")
-    need = ("id", "figure", "says", "criterion", "kind") + CRITERION_FIELDS[kind]
+    need = text + ("kind",) + CRITERION_FIELDS[kind]
     if set(c) != set(need):
         raise ScenarioError(f"{ctx}: a {kind!r} criterion has exactly the fields {list(need)}")
-    for k in ("id", "figure", "says", "criterion"):
+    for k in text:
         if not isinstance(c[k], str) or not c[k]:
             raise ScenarioError(f"{ctx}.{k} must be a non-empty text")
-    for k in _LABEL_FIELDS:
-        if k in c and not _label_ok(c[k]):
-            raise ScenarioError(f"{ctx}.{k} = {c[k]!r} must be 'base' or '<sweep>=<value>' with sweep in {list(_SWEEPS)}")
-    metrics = [c[k] for k in _METRIC_FIELDS if k in c] + list(c.get("metrics", [])) + list(c.get("product", []))
+    if kind == "all_of":
+        if not isinstance(c["parts"], list) or not c["parts"]:
+            raise ScenarioError(f"{ctx}.parts must be a non-empty list of criteria")
+        return dict(c, parts=[_criterion(p, drive_names, f"{ctx}.parts[{i}]", ()) for i, p in enumerate(c["parts"])])
+    for k in ("metrics", "product", "lower", "higher"):
+        if k in c and (not isinstance(c[k], list) or not c[k]):
+            raise ScenarioError(f"{ctx}.{k} must be a non-empty list of {'labels' if k in ('lower', 'higher') else 'metrics'}")
+    labels = [(k, c[k]) for k in _LABEL_FIELDS if k in c] + [(k, x) for k in ("lower", "higher") for x in c.get(k, [])]
+    for k, lab in labels:
+        if not _label_ok(lab):
+            raise ScenarioError(f"{ctx}.{k}: label {lab!r} must be 'base' or '<sweep>=<value>' with sweep in {list(_SWEEPS)}, "
+                                "optionally with '@<to>', '@<from>-<to>' or '@curve'")
+    metrics = [c[k] for k in _METRIC_FIELDS if k in c and kind != "mostly_from"] + list(c.get("metrics", [])) \
+        + list(c.get("product", [])) + ([f"{c['metric']}.{c['drive']}"] if kind == "mostly_from" else [])
     for m in metrics:
         if not _metric_ok(m, drive_names):
             raise ScenarioError(f"{ctx}: metric {m!r} must be HSR, RSR or CDA/CEDA.<drive or all> "
@@ -149,9 +170,8 @@ def _criterion(c: Any, drive_names: Sequence[str], ctx: str) -> dict:
     for k in ("value", "tol", "level", "lo", "hi"):
         if k in c:
             checked(c[k], f"{ctx}.{k}", error=ScenarioError)
-    if "points" in c and (not isinstance(c["points"], list) or len(c["points"]) != 3 or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in c["points"])):
-        raise ScenarioError(f"{ctx}.points must be three numbers [low, middle, high]")
-    for k in ("metrics", "product"):
-        if k in c and (not isinstance(c[k], list) or not c[k]):
-            raise ScenarioError(f"{ctx}.{k} must be a non-empty list of metrics")
+    for k in ("span", "when"):
+        if k in c and (not isinstance(c[k], list) or len(c[k]) != 2
+                       or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in c[k])):
+            raise ScenarioError(f"{ctx}.{k} must be two iterations [from, to]")
     return dict(c)

@@ -21,7 +21,7 @@ from homeo_msgs_py.learning import DOD
 
 from ..runner import RUN_LEARNING, RunConfig
 from ..stats import describe
-from .fidelity import fidelity, needed_labels, set_aggregates
+from .fidelity import fidelity, label_aggregates, needed_labels, set_aggregates
 from ..sweep import LEARN_HSR, LEARN_RSR, LEARNING_WINDOW, SWEEPS, JobResult, median_time, point_config
 
 BASELINES = ("random", "rule", "flatq", "nofeedback")  # "rule" only when the scenario has a rule_policy block
@@ -136,9 +136,10 @@ def _analyse(sc, base: RunConfig, R: dict, M: dict, seeds: int) -> dict:
     # against their criteria (both from the scenario's reference block; none without one)
     # the statements on disjoint sets of SET_SIZE seeds: only the runs the criteria read are cut into sets
     criteria = (sc.reference.criteria or ()) if sc.reference is not None else ()
-    M_sets = set_aggregates({k: [r.metrics for r in rs] for k, rs in R.items()}, sc.drive_names,
-                            needed_labels(criteria, SWEEPS))
-    d["fidelity"] = fidelity(sc.reference, M, SWEEPS, {DOD_SWEEP: base.dod}, M_sets=M_sets, n_seeds=seeds)
+    runs, needed = {k: [r.metrics | r.extra for r in rs] for k, rs in R.items()}, needed_labels(criteria, SWEEPS)
+    M_sets = set_aggregates(runs, sc.drive_names, needed)
+    M_all = M | label_aggregates(runs, sc.drive_names, needed - set(M))  # the parts of runs the criteria read
+    d["fidelity"] = fidelity(sc.reference, M_all, SWEEPS, {DOD_SWEEP: base.dod}, M_sets=M_sets, n_seeds=seeds)
     d["statements"] = d["fidelity"]["statements"]
     return d
 

@@ -8,8 +8,9 @@ reward noise (issue 25):
   More seeds only make our mean firmer. (``table_score`` also keeps, per number, whether it lies
   inside our 95% interval and the distance in half-widths, the score of issue 15: with more seeds
   the interval narrows and fewer numbers are "inside", so that count is not the score any more.)
-- the statements of the text about the sweeps (``criteria_score``: each statement's criterion, data
-  in ``reference.criteria``, written from the text): each is checked on every one of the disjoint
+- the statements of the text about its figures (``criteria_score``: each statement's criterion, data
+  in ``reference.criteria``, written from the text; a criterion may read part of a run, ``label_aggregates``):
+  each is checked on every one of the disjoint
   sets of ``SET_SIZE`` consecutive seeds (``seed_sets``), the size the criteria were written for;
   per statement, the share of sets on which it holds, and per set, how many statements hold.
 
@@ -22,9 +23,10 @@ reward noise (issue 25):
 
 from __future__ import annotations
 
+import math
 from typing import Mapping, Sequence
 
-from ..stats import aggregate
+from ..stats import aggregate, describe
 
 HALF_WIDTH_FLOOR = 0.05  # the distance's half-width is at least this fraction of the published value
 SET_SIZE = 20  # the statements are checked on disjoint sets of this many seeds
@@ -106,12 +108,65 @@ def seed_sets(seeds: Sequence[int], size: int = SET_SIZE) -> list[list[int]]:
 def set_aggregates(runs: Mapping[str, Sequence[Mapping]], drive_names: Sequence[str],
                    labels: set[str] | None = None) -> list[dict]:
     """``M`` per seed set (``seed_sets``), from ``runs``: ``{label: per-seed metrics}``, every label over the
-    same seeds in the same order; only the ``labels`` given (default: all)."""
+    same seeds in the same order; only the ``labels`` given (default: all; staged ones: ``label_aggregates``)."""
     # by position, not by seed: the runs of one label are in seed order, so the sets are the same
     n_seeds = len(next(iter(runs.values()), ()))
-    kept = {lab: per_seed for lab, per_seed in runs.items() if labels is None or lab in labels}
-    return [{lab: aggregate([per_seed[i] for i in pos], drive_names) for lab, per_seed in kept.items()}
-            for pos in seed_sets(range(n_seeds))]
+    return [label_aggregates(runs, drive_names, labels, pos) for pos in seed_sets(range(n_seeds))]
+
+
+# -- stages: the metrics over part of a run (issue 31) ------------------------------------------------
+# ``<run>@<a>-<b>``: the run's metrics over its iterations a+1..b (``<run>@<b>``: 1..b), with the unserved
+# intentions (``misses``) and insecure iterations (``insecure``) counted; ``<run>@curve``: the metrics after each
+# tick of ``metrics.stage_marks``, the mean over the seeds (the curves of Figs 4.1-4.2). Both come from the
+# running sums a run keeps after those ticks (its per-seed ``stages``).
+
+def _window(stages: Sequence[Mapping], st: str, names: Sequence[str]) -> dict:
+    lo, _, hi = st.rpartition("-")
+    at = {x["n"]: x for x in stages}
+    lo, hi = int(lo or 0), int(hi)
+    if hi not in at or (lo and lo not in at) or lo >= hi:
+        raise ValueError(f"a run of {max(at, default=0)} iterations has no stage {st}")
+    b = at[hi]
+    a = at[lo] if lo else {k: [0.0] * len(v) if isinstance(v, list) else 0 for k, v in b.items()}
+    n, ints, sat = b["n"] - a["n"], b["intentions"] - a["intentions"], b["satisfied"] - a["satisfied"]
+    out = {"HSR": sat / ints if ints else math.nan, "RSR": (b["secure"] - a["secure"]) / n, "misses": ints - sat,
+           "insecure": n - b["secure"] + a["secure"]}
+    for k, key in (("CDA", "sum"), ("CEDA", "excess")):
+        per = [(y - x) / n for x, y in zip(a[key], b[key])]
+        out[k] = dict(zip(names, per), all=sum(per) / len(per))
+    return out
+
+
+def label_aggregates(runs: Mapping[str, Sequence[Mapping]], drive_names: Sequence[str],
+                     labels: set[str] | None = None, pos: Sequence[int] | None = None) -> dict:
+    """``M`` of the ``labels`` (default: the runs') over the seeds at positions ``pos`` (default: all); a staged
+    label's run needs its per-seed ``stages``."""
+    out = {}
+    for lab in sorted(runs if labels is None else labels):
+        run, _, st = lab.partition("@")
+        if run not in runs:
+            continue
+        per = [runs[run][i] for i in (range(len(runs[run])) if pos is None else pos)]
+        if not st:
+            out[lab] = aggregate(per, drive_names)
+            continue
+        marks = [x["n"] for x in per[0]["stages"]] if st == "curve" else None
+        try:
+            wins = [[_window(m["stages"], str(t), drive_names) for t in marks] if marks else
+                    _window(m["stages"], st, drive_names) for m in per]
+        except ValueError:  # a shorter run: a criterion that reads this part says it was not measured
+            continue
+        if marks:  # the mean curve: per tick, the mean over the seeds (HSR over those with an intention by then)
+            mean = lambda xs: (lambda v: sum(v) / len(v) if v else math.nan)([x for x in xs if x == x])  # noqa: E731
+            out[lab] = {"t": marks} | {p: [mean([value_at(w[i], p) for w in wins]) for i in range(len(marks))]
+                                       for p in _paths(drive_names)}
+        else:
+            out[lab] = aggregate(wins, drive_names) | {k: describe([w[k] for w in wins]) for k in ("misses", "insecure")}
+    return out
+
+
+def _paths(names: Sequence[str]) -> list[str]:
+    return ["HSR", "RSR"] + [f"{k}.{d}" for k in ("CDA", "CEDA") for d in (*names, "all")]
 
 
 # -- statements about the sweeps -----------------------------------------------------------
@@ -166,20 +221,67 @@ def _check(c: Mapping, M: Mapping, sweeps: Mapping, base_value: Mapping | None) 
         a, b = value_at(M[c["a"]], c["metric"]), value_at(M[c["b"]], c["metric"])
         return (f"{c['metric']}: {a['mean']:.3f} ({c['a']}), {b['mean']:.3f} ({c['b']}); 95% intervals "
                 f"{'overlap' if _overlap(a, b) else 'apart'}", _overlap(a, b))
-    pts = _sweep(M, c, sweeps, base_value)
+    pts = _sweep(M, c, sweeps, base_value) if "sweep" in c else ()
     if k == "first_below":
         below = [v for v, lab in pts if _mean(M, lab, c["metric"]) < c["level"]]
         return (f"{c['metric']} < {c['level']:g} from {c['sweep']} {below[0]:g} on" if below else
                 f"{c['metric']} never below {c['level']:g}"), bool(below) and abs(below[0] - c["value"]) <= c["tol"] + 1e-9
-    if k == "linear":
-        lo, mid, hi = (f"{c['sweep']}={v}" for v in c["points"])
-        a, m, b = _mean(M, lo, c["metric"]), _mean(M, mid, c["metric"]), _mean(M, hi, c["metric"])
-        return (f"{c['metric']}({mid}) = {m:.3f}; the straight line from {a:.3f} to {b:.3f} gives {(a + b) / 2:.3f}",
-                abs(m - (a + b) / 2) <= c["tol"])
     if k == "best_near":
         best_v, _ = max(((v, _product_mean(M[lab], c["product"])) for v, lab in pts), key=lambda p: p[1])
         return (f"{' x '.join(c['product'])} is highest at {c['sweep']} {best_v:g}",
                 abs(best_v - c["value"]) <= c["tol"] + 1e-9)
+    if k == "lowest_at":
+        best_v = min(pts, key=lambda p: sum(_mean(M, p[1], m) for m in c["metrics"]))[0]
+        return f"the sum of {', '.join(c['metrics'])} is lowest at {c['sweep']} {best_v:g}", abs(best_v - c["value"]) <= c["tol"] + 1e-9
+    if k == "sweep_corr":
+        r = _pearson([v for v, _ in pts], [_mean(M, lab, c["metric"]) for _, lab in pts])
+        return f"Pearson r of {c['metric']} and {c['sweep']} over the sweep: {r:+.3f}", c["lo"] <= r <= c["hi"]
+    return _check_more(c, M, sweeps, base_value)
+
+
+def _pearson(x: Sequence[float], y: Sequence[float]) -> float:
+    mx, my = sum(x) / len(x), sum(y) / len(y)
+    sxy = sum((a - mx) * (b - my) for a, b in zip(x, y))
+    sxx, syy = sum((a - mx) ** 2 for a in x), sum((b - my) ** 2 for b in y)
+    return sxy / math.sqrt(sxx * syy) if sxx and syy else math.nan
+
+
+def _check_more(c: Mapping, M: Mapping, sweeps: Mapping, base_value: Mapping | None) -> tuple[str, bool]:
+    """The kinds of issue 31: parts of a run (staged labels), ratios, significance, curves, several at once."""
+    k, m = c["kind"], c.get("metric")
+    if k == "all_of":
+        parts = [_check(p, M, sweeps, base_value) for p in c["parts"]]
+        return "; ".join(t for t, _ in parts), all(ok for _, ok in parts)
+    if k == "within":
+        xs = [_mean(M, c["at"], p) for p in c["metrics"]]
+        return (f"{', '.join(f'{p} {x:.3f}' for p, x in zip(c['metrics'], xs))} ({c['at']}); in [{c['lo']:g}, {c['hi']:g}]",
+                all(c["lo"] <= x <= c["hi"] for x in xs))
+    if k == "ratio":
+        a, b = _mean(M, c["from"], m), _mean(M, c["to"], m)
+        q = b / a if a else math.inf
+        return f"{m}: {b:.3f} ({c['to']}) / {a:.3f} ({c['from']}) = {q:.3f}", c["lo"] <= q <= c["hi"]
+    if k == "gain_larger":
+        g, g2 = (_mean(M, c[t], m) - _mean(M, c[f], m) for f, t in (("from", "to"), ("than_from", "than_to")))
+        return f"{m}: {g:+.3f} ({c['from']} -> {c['to']}) against {g2:+.3f} ({c['than_from']} -> {c['than_to']})", g > g2
+    if k == "mostly_from":
+        drops = {d: _mean(M, c["from"], f"{m}.{d}") - _mean(M, c["to"], f"{m}.{d}") for d in M[c["from"]][m] if d != "all"}
+        total = sum(drops.values())
+        share = drops[c["drive"]] / total if total > 0 else math.nan
+        return (f"{m} all falls by {total / len(drops):.3f} ({c['from']} -> {c['to']}), {c['drive']}'s share {share:.2f}",
+                share > c["value"])
+    if k == "apart":
+        pairs = [(p, lo, hi) for p in c["metrics"] for lo in c["lower"] for hi in c["higher"]]
+        bad = [f"{p} {lo} vs {hi}" for p, lo, hi in pairs if not value_at(M[lo], p)["ci95"][1] < value_at(M[hi], p)["ci95"][0]]
+        return f"95% intervals apart in {len(pairs) - len(bad)} of {len(pairs)}" + (f" (not: {', '.join(bad)})" if bad else ""), not bad
+    cur = M[f"{c['at']}@curve"]
+    idx = [i for i, t in enumerate(cur["t"]) if c["span"][0] <= t <= c["span"][1]]
+    if k == "curve_corr":
+        r = _pearson([cur[c["x"]][i] for i in idx], [cur[c["y"]][i] for i in idx])
+        return f"Pearson r of {c['x']} and {c['y']} over iterations {c['span'][0]}-{c['span'][1]}: {r:+.3f}", c["lo"] <= r <= c["hi"]
+    if k == "curve_min":
+        i = min(idx, key=lambda j: cur[m][j])
+        return (f"{m} lowest at iteration {cur['t'][i]}: {cur[m][i]:.3f}",
+                cur[m][i] < c["value"] and c["when"][0] <= cur["t"][i] <= c["when"][1])
     raise ValueError(f"unknown criterion kind {k!r}")
 
 
@@ -189,21 +291,26 @@ def criteria_score(criteria: Sequence[Mapping], M: Mapping, sweeps: Mapping,
     ``base_value``: the default run's value of each swept parameter (it joins that sweep)."""
     out = []
     for c in criteria:
-        ours, ok = _check(c, M, sweeps, base_value)
+        try:
+            ours, ok = _check(c, M, sweeps, base_value)
+        except KeyError as exc:
+            ours, ok = f"not measured: these runs have no {exc.args[0]}", False
         out.append({"id": c["id"], "figure": c["figure"], "thesis": c["says"], "criterion": c["criterion"],
                     "ours": ours, "agrees": bool(ok)})
     return out
 
 
 def needed_labels(criteria: Sequence[Mapping], sweeps: Mapping) -> set[str]:
-    """The run labels the criteria read (so that a search runs only those)."""
+    """The labels the criteria read (staged ones included; ``<run>@...`` needs the run ``<run>``)."""
     out = {"base"}
     for c in criteria:
-        out |= {c[k] for k in ("at", "from", "to", "a", "b") if k in c}
-        if "points" in c:
-            out |= {f"{c['sweep']}={v}" for v in c["points"]}
-        elif "sweep" in c:
+        out |= {c[k] for k in ("at", "from", "to", "a", "b", "than_from", "than_to") if k in c}
+        out |= {lab for k in ("lower", "higher") for lab in c.get(k, ())}
+        if c["kind"].startswith("curve_"):
+            out.add(f"{c['at']}@curve")
+        if "sweep" in c:
             out |= {f"{c['sweep']}={v}" for v in sweeps.get(c["sweep"], ())}
+        out |= needed_labels(c.get("parts", ()), sweeps) - {"base"}
     return out
 
 
