@@ -470,3 +470,138 @@ def test_a_drive_growing_always_is_never_still(toy_raw, enc):
     raw["open"]["drive_growth"] = {"NEng": "always"}
     sc = scenario_from_dict(raw)
     assert DriveDynamics(sc, "body").still(enc(sc, "H"), sc.action_index("GoB")) == ()
+
+
+# -- motivation (Eq 3.2-3.3, 3.27-3.28; Definition 1) ---------------------------------------------------------
+def test_a_drive_at_its_threshold_is_activated():
+    from homeo_decision.motivation import motivational_state
+
+    # Eq 3.2: intensity 0 only when d < at; NAch 30 at its threshold 30 is activated: 30 + stimulus 5 = 35;
+    # NEng 10 < 50 is not: 0
+    assert motivational_state([30.0, 10.0], [30.0, 50.0], [5.0, 0.0]) == ([35.0, 0.0], 0)
+
+
+def test_a_tie_goes_to_the_first_declared_by_default():
+    from homeo_decision.motivation import dominant, motivational_state
+
+    # Eq 3.3 with intensities 40 and 40 and no tie_break given: the first (index 0), not the last (1)
+    assert dominant([40.0, 40.0]) == 0
+    # both drives 40 over thresholds 0, no stimulus: intensities 40, 40; m_dom 0 by the default rule
+    assert motivational_state([40.0, 40.0], [0.0, 0.0], [0.0, 0.0]) == ([40.0, 40.0], 0)
+
+
+def test_the_none_state_is_taken_only_when_no_motivation_is_activated():
+    from homeo_decision.motivation import motivational_state
+
+    # open choice no_activated_motivation: any none_state >= 0 names the state of "none activated" (Definition 6).
+    # Drives 10 and 20 under thresholds 50: intensities 0, 0; the none state given is 0, so m_dom is 0, where
+    # Eq 3.3's argmax with ties to the last would give 1
+    assert motivational_state([10.0, 20.0], [50.0, 50.0], [0.0, 0.0], "last", 0) == ([0.0, 0.0], 0)
+    # an intensity of 0.5 (drive 0.5 over threshold 0) is activated, however small: m_dom 0, not the none state 1
+    assert motivational_state([0.5], [0.0], [0.0], "first", 1) == ([0.5], 0)
+
+
+def test_dod_weights_of_one_drive_and_a_dod_out_of_range():
+    from homeo_decision.motivation import dod_weights
+
+    # Eq 3.27-3.28 with |D| = 1: the weights sum to |D| = 1, so the one drive weighs 1 whatever the DoD
+    assert dod_weights(0.3, 1, 0) == [1.0]
+    with refused("DoD must be in [0, 1], got 1.5"):  # the refusal says what was given
+        dod_weights(1.5, 2, 0)
+
+
+def test_clamp_keeps_a_drive_inside_0_100_and_moves_nothing_else():
+    from homeo_decision.motivation import clamp
+
+    # Definition 1: -0.5 -> 0; 0.5 and 99.5 stay (inside, however close to a bound); 100.5 -> 100
+    assert [clamp(x) for x in (-0.5, 0.5, 99.5, 100.5)] == [0.0, 0.5, 99.5, 100.0]
+
+
+# -- Object Q-learning (Eq 3.11-3.17) -------------------------------------------------------------------------
+def test_a_tick_before_the_first_phase_has_the_first_phase():
+    from homeo_decision.objectq import Phase, phase_at
+
+    sched = (Phase(10, 0.3, 4.0), Phase(20, 0.1, 2.0))
+    # tick 5 precedes every start: the first phase; tick 10 starts it; tick 25 is past 20: the second
+    assert phase_at(sched, 5) is sched[0] and phase_at(sched, 10) is sched[0] and phase_at(sched, 25) is sched[1]
+
+
+def test_softmax_of_large_values_does_not_overflow():
+    from homeo_decision.objectq import softmax_pick, softmax_probs
+
+    # Eq 3.17 with Q = 1000 and 999 at tau 1: exp(1000) overflows a float, exp(Q - max) = exp(0), exp(-1) does not:
+    # P = 1 / (1 + e^-1) = e / (e + 1) = 0.731, 1 / (e + 1) = 0.269
+    e = math.e
+    assert softmax_probs([1000.0, 999.0], 1.0) == pytest.approx([e / (e + 1), 1 / (e + 1)])
+    # cumulative weights 1, 1 + 1/e = 1.368; u = 0.5 -> 0.684 < 1: the first action; u = 0.75 -> 1.026 >= 1: the second
+    assert softmax_pick([1000.0, 999.0], [7, 8], 1.0, 0.5) == 7 and softmax_pick([1000.0, 999.0], [7, 8], 1.0, 0.75) == 8
+
+
+def test_a_draw_at_the_top_of_the_range_picks_the_last_action():
+    from homeo_decision.objectq import softmax_pick
+
+    # equal values: cumulative weights 1, 2, 3; u = 1 (the closed end of a draw) -> 3, which no weight exceeds:
+    # the last action (6), not the second (5) nor past the end
+    assert softmax_pick([0.0, 0.0, 0.0], [4, 5, 6], 1.0, 1.0) == 6
+
+
+def test_an_initial_q_given_wins_over_the_scenario_s(toy):
+    from homeo_decision.objectq import ObjectQ
+
+    assert toy.open.initial_q == 0.0
+    q = ObjectQ(toy, initial_q=2.5)  # every entry of every table starts at the value given
+    assert q.initial_q == 2.5 and {v for t in q.q for row in t for v in row} == {2.5}
+
+
+def test_the_reduced_state_is_the_documented_number(toy, enc):
+    from homeo_decision.objectq import ObjectQ
+
+    q = ObjectQ(toy)
+    code = enc(toy, "B", intention="on", box="on")
+    # Eq 3.11-3.13: (m_dom * n_hum + hum) * n_states_o + object_state. Toy: S_hum = 3 intentions (none, on, come)
+    # x 3 relations (near, far, absent): n_hum 9; intention "on" 1, the human at H and the robot at B: far 1 ->
+    # hum = 1 * 3 + 1 = 4. box: distance (near, far) x status (off, on): 4 states; near 0, on 1 -> 0 * 2 + 1 = 1.
+    # null: 1 state (0). m_dom 1: box (1 * 9 + 4) * 4 + 1 = 53; null (1 * 9 + 4) * 1 + 0 = 13
+    assert q.states(1, code) == (53, 13)
+    assert q.states(0, code) == (4 * 4 + 1, 4)  # m_dom 0: (0 + 4) * 4 + 1 = 17; null 4
+
+
+def test_value_max_over_valid_subtracts_the_other_object_s_max(toy_raw, enc):
+    from homeo_decision.objectq import ObjectQ
+    from homeo_decision.scenario import scenario_from_dict
+
+    raw = toy_raw()
+    raw["open"]["value_max_over"] = "valid"
+    sc = scenario_from_dict(raw)
+    q = ObjectQ(sc)
+    A, H = enc(sc, "B"), enc(sc, "H")
+    s, s2 = q.states(0, A), q.states(0, H)  # the human's relation changes (far -> near): both objects' states change
+    box, null = 0, 1
+    turn_on, turn_off = q.act_local[sc.action_index("TurnOn")], q.act_local[sc.action_index("TurnOff")]
+    q.q[box][s2[box]][turn_on] = 100.0  # invalid at H
+    q.q[box][s2[box]][turn_off] = 1.0
+    q.q[null][s2[null]][q.act_local[sc.action_index("GoB")]] = 2.0
+    q.q[null][s[null]][q.act_local[sc.action_index("GoH")]] = 1.0
+    # Eq 3.15-3.16 over the valid actions: V = max_valid Q^box(s') = 1 + [max Q^null(s') = 2 - max Q^null(s) = 1] = 2
+    # Eq 3.14: Q <- 0.5 * 0 + 0.5 * (0 + 0.5 * 2) = 0.5
+    assert q.update(sc.action_index("TurnOff"), s, 0.0, s2, 0.5, 0.5, A, H) == pytest.approx(0.5)
+
+
+def test_value_max_over_valid_with_no_valid_action_takes_them_all(toy_raw, enc):
+    from homeo_decision.objectq import ObjectQ
+    from homeo_decision.scenario import scenario_from_dict
+
+    raw = toy_raw()
+    raw["open"]["value_max_over"] = "valid"
+    raw["actions"][1]["requires"] = {"box.distance": ["near"]}  # TurnOff too needs the box near: none valid at H
+    sc = scenario_from_dict(raw)
+    q = ObjectQ(sc)
+    A, H = enc(sc, "B"), enc(sc, "H")
+    assert q.valid_local[H][0] == ()
+    s, s2 = q.states(0, A), q.states(0, H)
+    q.q[0][s2[0]][q.act_local[sc.action_index("TurnOn")]] = 100.0
+    q.q[0][s2[0]][q.act_local[sc.action_index("TurnOff")]] = 1.0
+    q.q[1][s2[1]][q.act_local[sc.action_index("GoB")]] = 2.0
+    # no valid box action at H: the max over all of A_box, 100; V = 100 + [2 - 0] = 102
+    # Q <- 0.5 * 0 + 0.5 * (0 + 0.5 * 102) = 25.5
+    assert q.update(sc.action_index("TurnOff"), s, 0.0, s2, 0.5, 0.5, A, H) == pytest.approx(25.5)

@@ -27,6 +27,7 @@ OUT = ROOT / "out" / "mutation"
 
 SIM = ["test_sim_world_human.py", "test_energy_readings.py", "test_fidelity.py", "test_scenario.py"]
 DECISION = ["test_objectq.py", "test_reward.py", "test_baselines.py", "test_determinism.py"]
+INTENTION = ["test_intention_core.py", "test_intention_cases.py"]  # the hand-computed cases of Section 2.3
 MODULES = {  # module -> its source file and the fast ROS-free tests of it (with tests/test_core_cases.py: the
     # cases written by hand for its survivors); mutmut runs, for each mutant, those of them that call it
     "reward": ("src/homeo_decision/reward.py", DECISION),
@@ -35,8 +36,8 @@ MODULES = {  # module -> its source file and the fast ROS-free tests of it (with
     "drives": ("src/homeo_decision/drives.py", ["test_motivation.py", *SIM]),
     "agent": ("src/homeo_decision/agent.py", DECISION),
     "metrics": ("src/homeo_sim/metrics.py", ["test_metrics.py", "test_sim_world_human.py"]),
-    "intention_model": ("src/homeo_intention/model.py", ["test_intention_core.py"]),
-    "intention_em": ("src/homeo_intention/em.py", ["test_intention_core.py"]),
+    "intention_model": ("src/homeo_intention/model.py", INTENTION),
+    "intention_em": ("src/homeo_intention/em.py", INTENTION),
     "world": ("src/homeo_sim/world.py", SIM),
     "body": ("src/homeo_sim/body.py", SIM),
     "human": ("src/homeo_sim/human.py", SIM),
@@ -60,6 +61,15 @@ EQUIVALENT: dict[str, str] = {
                  "DriveModelǁset_body__mutmut_7", "DriveModelǁset_body__mutmut_12")},
     "homeo_decision.drives.xǁDriveDynamicsǁ__init____mutmut_10": "the drives outside the dynamics' subset are never read",
     "homeo_decision.drives.xǁDriveModelǁapply_time__mutmut_29": "no drive has index -2 either: none is skipped",
+    # Eq 3.3's loop from index 0: intens[0] against itself as the top so far, > never holds, >= sets (0, intens[0])
+    # again, and a NaN compares false either way
+    "homeo_decision.motivation.x_dominant__mutmut_12": "argmax from index 0: intens[0] > itself never holds",
+    "homeo_decision.motivation.x_dominant__mutmut_19": "argmax from index 0: intens[0] >= itself sets best 0 again",
+    "homeo_decision.motivation.x_clamp__mutmut_4": "x = 0 gives 0.0 for x: the bound's own value (-0.0 == 0.0)",
+    "homeo_decision.motivation.x_clamp__mutmut_9": "x = 100 gives 100.0 for x: the bound's own value",
+    # the loader gives every prior as a tuple of Python floats (scenario/load.py's dist): a float64 array either way
+    **{f"homeo_intention.model.x_prior_params__mutmut_{n}": "the priors as numpy takes them: floats make a float array "
+       "with or without dtype=float" for n in (7, 9, 11, 13)},
     "homeo_sim.metrics.x_summarize__mutmut_28": "numpy's 0 / 0 is nan, as the guarded branch gives",
     "homeo_sim.human.xǁSimHumanǁadvance__mutmut_2": DRAW,  # u < p_leave
     "homeo_sim.human.xǁSimHumanǁadvance__mutmut_6": DRAW,  # u < p_return
