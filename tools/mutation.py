@@ -94,12 +94,19 @@ EQUIVALENT: dict[str, str] = {
 
 
 def _mutmut_config(source: str, tests: list) -> str:
-    tests = ", ".join(json.dumps(str(ROOT / "tests" / t)) for t in [*tests, "test_core_cases.py"])
+    """mutmut runs pytest in ``mutants/``, on its copy of tests/ (with the mutated src/ first on the path), with
+    ``--rootdir=.``: the tests are selected there too (``tests/...``, the copies) and the repository's pytest
+    settings read with ``-c``. A selection of the repository's own tests/ (or its rootdir) would import each test
+    module from there first, and every mutant's run would then stop at pytest's "import file mismatch" with
+    the copy, a failure mutmut counts as a kill; and a test written since the last run would be named by a
+    path that does not exist from ``mutants/``, the same false kill."""
+    tests = ", ".join(json.dumps(f"tests/{t}") for t in [*tests, "test_core_cases.py"])
     return ("[tool.mutmut]\n"
             'source_paths = ["src"]\n'
+            'also_copy = ["docs"]\n'  # a test reads docs/ beside its tests/ (test_fidelity: FIDELITY.md)
             f"only_mutate = [{json.dumps(source)}]\n"
             f"pytest_add_cli_args_test_selection = [{tests}]\n"
-            f'pytest_add_cli_args = ["-p", "no:xdist", "-p", "no:cacheprovider", "--rootdir", {json.dumps(str(ROOT))}]\n')
+            f'pytest_add_cli_args = ["-p", "no:xdist", "-p", "no:cacheprovider", "-c", {json.dumps(str(ROOT / "pyproject.toml"))}]\n')
 
 
 def _fresh_copy(work: Path, source: str) -> None:
@@ -116,7 +123,7 @@ def run_module(name: str, jobs: int, budget: float) -> dict:
     work = OUT / name
     work.mkdir(parents=True, exist_ok=True)
     (work / "pyproject.toml").write_text(_mutmut_config(source, tests))
-    for d in ("src", "tests"):  # mutmut names tests by their path from here when it finds new ones
+    for d in ("src", "tests", "docs"):  # what mutmut copies into mutants/ (also_copy)
         if not (work / d).exists():
             (work / d).symlink_to(ROOT / d)
     _fresh_copy(work, source)
