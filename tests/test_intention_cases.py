@@ -39,8 +39,10 @@ def sc(toy_raw):
 
 
 # Eq 2.10 with movement unobserved: P(I) P(gesture | I) P(keyword | I)
-POINT_ON = {"gesture": "point", "keyword": "on"}  # none 0.5*0.1*0.05 = 0.0025, on 0.3*0.7*0.7 = 0.147, come 0.2*0.1*0.1 = 0.002: on
-NONE_NONE = {"gesture": "none", "keyword": "none"}  # none 0.5*0.8*0.9 = 0.36, on 0.3*0.2*0.2 = 0.012, come 0.2*0.3*0.3 = 0.018: none
+# (point, on): none 0.5*0.1*0.05 = 0.0025, on 0.3*0.7*0.7 = 0.147, come 0.2*0.1*0.1 = 0.002: on
+POINT_ON = {"gesture": "point", "keyword": "on"}
+# (none, none): none 0.5*0.8*0.9 = 0.36, on 0.3*0.2*0.2 = 0.012, come 0.2*0.3*0.3 = 0.018: none
+NONE_NONE = {"gesture": "none", "keyword": "none"}
 
 
 # -- homeo_intention.model -----------------------------------------------------------------------------------
@@ -99,3 +101,91 @@ def test_a_model_as_json_keeps_its_meta_and_takes_the_settings_given(sc):
         IntentionModel.from_json(sc, {"schema": "other"})
     with refused(f"a.json: {schema}", IntentionModelError):
         IntentionModel.from_json(sc, {"schema": "other"}, "a.json")
+
+
+# -- homeo_intention.em: run_em on counts built by hand ---------------------------------------------------------
+# P(gesture | I) rows of the prior (none, point, beckon), P(keyword | I) rows (none, on, come; come takes the rest)
+G0 = [[0.8, 0.1, 0.1], [0.2, 0.7, 0.1], [0.3, 0.1, 0.6]]
+W0 = [[0.9, 0.05, 0.05], [0.2, 0.7, 0.1], [0.3, 0.1, 0.6]]
+THIRDS = [[1 / 3] * 3] * 3  # movement: no prior given, 1/3 each
+
+
+def _counts(m, rows):
+    """labelled (K x cells) and unlabelled (cells) counts of ``rows``: (observation, label or None)."""
+    lab, unl = np.zeros_like(m.labelled), np.zeros_like(m.unlabelled)
+    for obs, label in rows:
+        if label is None:
+            unl[m.coder.cell(obs)] += 1.0
+        else:
+            lab[label, m.coder.cell(obs)] += 1.0
+    return lab, unl
+
+
+def _close(p, pi, rho, likes):
+    assert p.pi.tolist() == pytest.approx(pi, abs=1e-12) and p.rho.tolist() == pytest.approx(rho, abs=1e-12)
+    for got, want in zip(p.likes, likes):
+        assert got.tolist() == [pytest.approx(r, abs=1e-12) for r in want]
+
+
+def test_ml_em_keeps_what_no_count_speaks_of(sc):
+    from homeo_intention.em import run_em
+    from homeo_intention.model import prior_params
+
+    m, prior = IntentionModel(sc), prior_params(sc)
+    lab, unl = _counts(m, [(POINT_ON, 1)])  # one tick: (point, -, on) revealed as 'on'
+    p, n = run_em(prior, lab, unl, m.coder.shape, prior, 0.0)
+    # strength 0 (maximum likelihood), labelled counts only: P(I) = counts / total = (0, 1, 0) / 1;
+    # rho_k = revealed_k / n_k: 'on' 1 / 1 = 1, 'none' and 'come' 0 / 0: no count, kept at 0.5;
+    # P(s | on) = its counts: point 1 of 1, keyword on 1 of 1; every other row (and movement, never seen): kept
+    _close(p, [0.0, 1.0, 0.0], [0.5, 1.0, 0.5],
+           [[G0[0], [0.0, 1.0, 0.0], G0[2]], THIRDS, [W0[0], [0.0, 1.0, 0.0], W0[2]]])
+    assert n == 2  # the counts alone fix the M-step: the second iteration moves nothing
+    p, n = run_em(prior, lab * 0, unl, m.coder.shape, prior, 0.0)  # no count at all: every parameter kept
+    _close(p, [0.5, 0.3, 0.2], [0.5, 0.5, 0.5], [G0, THIRDS, W0])
+    assert n == 1  # the first iteration moves nothing
+
+
+def test_em_over_an_unlabelled_tick_with_unobserved_channels(sc):
+    from homeo_intention.em import run_em
+    from homeo_intention.model import prior_params
+
+    m, prior = IntentionModel(sc), prior_params(sc)
+    lab, unl = _counts(m, [({"gesture": "point"}, None)])  # movement and keyword unobserved: they drop out
+    p, n = run_em(prior, lab, unl, m.coder.shape, prior, 0.0)
+    # E-step: w_k proportional to P(k) (1 - rho_k) P(point | k) = 0.5*0.5*0.1 = 0.025, 0.3*0.5*0.7 = 0.105,
+    # 0.2*0.5*0.1 = 0.01; sum 0.14: w = 5/28, 21/28, 2/28. M-step (strength 0): P(I) = w; rho = 0 / w_k = 0;
+    # P(point | k) = w_k / w_k = 1; movement and keyword have no counts: kept.
+    # Iteration 2: w_k proportional to P(k) * 1 * 1 = w_k again: nothing moves
+    w = [5 / 28, 21 / 28, 2 / 28]
+    _close(p, w, [0.0, 0.0, 0.0], [[[0.0, 1.0, 0.0]] * 3, THIRDS, W0])
+    assert n == 2
+
+
+def test_a_tick_no_intention_explains_keeps_the_prior_as_its_posterior(sc):
+    from homeo_intention.em import Params, run_em
+    from homeo_intention.model import prior_params
+
+    m, prior = IntentionModel(sc), prior_params(sc)
+    start = Params(prior.pi, [np.array([[1.0, 0.0, 0.0]] * 3), *prior.likes[1:]])  # every intention gestures 'none'
+    lab, unl = _counts(m, [({"gesture": "point"}, None)])
+    p, n = run_em(start, lab, unl, m.coder.shape, prior, 0.0)
+    # P(point | k) = 0 for every k: zero evidence, the tick's weights are P(I) = 0.5, 0.3, 0.2 themselves;
+    # M-step: P(I) = those; rho = 0; P(point | k) = 1. Iteration 2: w proportional to P(k) * 1: nothing moves
+    _close(p, [0.5, 0.3, 0.2], [0.0, 0.0, 0.0], [[[0.0, 1.0, 0.0]] * 3, THIRDS, W0])
+    assert n == 2
+
+
+def test_when_an_em_run_stops(sc):
+    from homeo_intention.em import run_em
+    from homeo_intention.model import prior_params
+
+    m, prior = IntentionModel(sc), prior_params(sc)
+    lab, unl = _counts(m, [(POINT_ON, 1), (NONE_NONE, 0)])
+    shape = m.coder.shape
+    # labelled counts only: iteration 1 reaches the MAP estimate, iteration 2 moves exactly 0
+    assert run_em(prior, lab, unl, shape, prior, 10.0)[1] == 2  # 0 <= the default atol 1e-6
+    assert run_em(prior, lab, unl, shape, prior, 10.0, atol=0.0)[1] == 2  # a move of 0 is within atol 0
+    assert run_em(prior, lab, unl, shape, prior, 10.0, atol=-1.0)[1] == 100  # never within: the default max_iter
+    p, n = run_em(prior, lab, unl, shape, prior, 10.0, max_iter=0)  # no iteration: the start, 0 iterations
+    assert n == 0
+    _close(p, [0.5, 0.3, 0.2], [0.5, 0.5, 0.5], [G0, THIRDS, W0])

@@ -47,6 +47,9 @@ MODULES = {  # module -> its source file and the fast ROS-free tests of it (with
 DRAW = ("a uniform draw on [0, 1) compared with a probability: < and <= (>= and >) differ only when the draw equals "
         "it exactly, one 53-bit float in 2^53; no seed of a test reaches it")
 CACHE = "the phase cache's span: the same phase is found again for each of its ticks"
+SAFE_GUARDED = ("EM's guarded division where the plain one was: the same quotient wherever a total is > 0, and no "
+                "total is 0 where the plain one was taken")
+SAFE_PLAIN = "EM's plain division where the guarded one was, only with strength > 0: every total is then >= strength > 0"
 EQUIVALENT: dict[str, str] = {
     # DecisionCore.phase caches the phase of a span of ticks; these change only when it is looked up again
     # (phase_at gives the same phase for every tick of the span), or an empty span the first lookup fills
@@ -70,6 +73,14 @@ EQUIVALENT: dict[str, str] = {
     # the loader gives every prior as a tuple of Python floats (scenario/load.py's dist): a float64 array either way
     **{f"homeo_intention.model.x_prior_params__mutmut_{n}": "the priors as numpy takes them: floats make a float array "
        "with or without dtype=float" for n in (7, 9, 11, 13)},
+    # em.py's `safe` only picks x / tot over np.divide(..., where=tot > 0), which divides the same wherever tot > 0:
+    # a mutant that picks the guarded division more often computes the same; one that picks the plain one more
+    # often does so only with strength > 0, where every total is >= strength > 0 for priors that are distributions
+    # (P(I) sums to 1: sum y >= strength K; rho: n_k + strength; a channel's pseudo counts sum to strength)
+    **{f"homeo_intention.em.xǁEMDataǁ__init____mutmut_{n}": SAFE_GUARDED for n in (41, 45, 46, 48, 50, 52)},
+    **{f"homeo_intention.em.xǁEMDataǁ__init____mutmut_{n}": SAFE_PLAIN for n in (42, 43, 44, 47, 49, 51)},
+    **{f"homeo_intention.em.x_em_step__mutmut_{n}": SAFE_GUARDED for n in (42, 47, 63, 74, 87)},
+    "homeo_intention.em.xǁEMDataǁ__init____mutmut_99": "one more row of ones below the table, which no cell points at",
     "homeo_sim.metrics.x_summarize__mutmut_28": "numpy's 0 / 0 is nan, as the guarded branch gives",
     "homeo_sim.human.xǁSimHumanǁadvance__mutmut_2": DRAW,  # u < p_leave
     "homeo_sim.human.xǁSimHumanǁadvance__mutmut_6": DRAW,  # u < p_return
