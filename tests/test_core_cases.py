@@ -605,3 +605,161 @@ def test_value_max_over_valid_with_no_valid_action_takes_them_all(toy_raw, enc):
     # no valid box action at H: the max over all of A_box, 100; V = 100 + [2 - 0] = 102
     # Q <- 0.5 * 0 + 0.5 * (0 + 0.5 * 102) = 25.5
     assert q.update(sc.action_index("TurnOff"), s, 0.0, s2, 0.5, 0.5, A, H) == pytest.approx(25.5)
+
+
+# -- Algorithm 1's open choices on the motivation factor and the pseudo update (Eq 3.20-3.21, 3.23) --------------
+def _core(toy_raw, **open_choices):
+    from homeo_decision.agent import DecisionCore
+    from homeo_decision.scenario import scenario_from_dict
+
+    raw = toy_raw()
+    raw["open"].update(open_choices)
+    sc = scenario_from_dict(raw)
+    return sc, DecisionCore(sc, 0)
+
+
+def _set(core, sc, name, states, value):
+    a = sc.action_index(name)
+    core.q.q[core.q.act_obj[a]][states[core.q.act_obj[a]]][core.q.act_local[a]] = value
+
+
+def _get(core, sc, name, states):
+    return core.q.value(sc.action_index(name), states)
+
+
+def test_the_motivation_bonus_goes_to_m_dom_or_only_to_an_activated_one(toy_raw, enc):
+    from homeo_decision.agent import Percept
+
+    sc, core = _core(toy_raw)  # the default, motivation_bonus = dominant: k = m_dom whatever its intensity
+    X = enc(sc, "B")
+    assert core.bonus_drive(Percept(X, (0.0, 58.0), [0.0, 58.0], 0, ())) == 0
+    sc, core = _core(toy_raw, motivation_bonus="activated")  # Definition 6: only while intensity(m_dom) > 0
+    assert core.bonus_drive(Percept(X, (0.0, 58.0), [0.0, 58.0], 0, ())) == -1  # intensity 0: no bonus (k = -1)
+    assert core.bonus_drive(Percept(X, (0.5, 0.0), [0.5, 0.0], 0, ())) == 0  # 0.5 > 0: activated, however little
+    assert core.bonus_drive(Percept(X, (0.0, 0.0), [0.0, 0.0], 2, ())) == -1  # m_dom 'none' (index 2): no drive
+
+
+def test_perception_takes_the_none_state_when_nothing_is_activated(toy_raw, enc):
+    sc, core = _core(toy_raw, no_activated_motivation="none")
+    # NAch 0 (threshold 0, no intention: no stimulus): intensity 0 + 0 = 0; NEng 10 < 50: 0. None activated:
+    # m_dom is 'none', the state after the 2 motivations: 2
+    p = core.perceive([0.0, 10.0], enc(sc, "H"))
+    assert (p.intensities, p.m_dom) == ([0.0, 0.0], 2)
+
+
+def test_the_default_seed_is_0(toy):
+    from homeo_decision.agent import DecisionCore
+
+    a, b = DecisionCore(toy), DecisionCore(toy, 0)
+    assert a.seed == 0 and [a.rng.random() for _ in range(3)] == [b.rng.random() for _ in range(3)]
+
+
+def _pseudo_setup(core, sc, X, s, s_dag, extra=()):
+    """Q(s, TurnOn) = 1, Q(s, GoH) = 2; Q(s+, TurnOn) = 3, Q(s+, GoH) = 6 (and what ``extra`` sets)."""
+    _set(core, sc, "TurnOn", s, 1.0)
+    _set(core, sc, "GoH", s, 2.0)
+    _set(core, sc, "TurnOn", s_dag, 3.0)
+    _set(core, sc, "GoH", s_dag, 6.0)
+    for name, states, v in extra:
+        _set(core, sc, name, states, v)
+
+
+def test_the_pseudo_update_with_max_over_valid_reads_both_worlds(toy_raw, enc):
+    # test_objectq.py's pseudo case with value_max_over = valid: at B every action is valid, so the same numbers
+    sc, core = _core(toy_raw, value_max_over="valid")
+    X = enc(sc, "B", intention="on")
+    p = core.perceive([45.0, 58.0], X)  # Serving 45 + 20 = 65 > Survival 58: m_dom 0
+    s, s_dag = p.states, core.q.states(1, X)  # praise -10: Serving 35 + 20 = 55 < 58: m+ = Survival (1)
+    _pseudo_setup(core, sc, X, s, s_dag)
+    p_next = core.perceive([48.0, 60.0], X)
+    out = core.learn(p, sc.action_index("Wait"), (48.0, 60.0), -1, sc.action_index("TurnOn"), p_next, 0)
+    # Wait: r = 2*(45-48) + (58-60) - 10 = -18; V = max_valid Q^null(s) = 2 + 0; Q = 0.5*0 + 0.5*(-18 + 0.5*2) = -8.5
+    assert out.reward == -18.0 and _get(core, sc, "Wait", s) == pytest.approx(-8.5)
+    # TurnOn: r+ = 2*1*(45-35) + 10 = 30; V = 3 + (6 - 2) = 7; Q = 0.5*1 + 0.5*(30 + 0.5*7) = 17.25
+    assert out.pseudo_reward == 30.0 and _get(core, sc, "TurnOn", s) == pytest.approx(17.25)
+
+
+def test_the_pseudo_state_breaks_a_tie_by_the_scenario_s_rule(toy_raw, enc):
+    sc, core = _core(toy_raw)  # tie_break first
+    X = enc(sc, "B", intention="on")
+    p = core.perceive([48.0, 58.0], X)  # Serving 48 + 20 = 68 > 58: m_dom 0
+    s, other = p.states, core.q.states(1, X)
+    # praise -10: Serving 38 + 20 = 58 = Survival 58, a tie: the first, Serving (0): s+ = s
+    _pseudo_setup(core, sc, X, s, other)
+    p_next = core.perceive([51.0, 60.0], X)
+    out = core.learn(p, sc.action_index("Wait"), (51.0, 60.0), -1, sc.action_index("TurnOn"), p_next, 0)
+    # Wait: r = 2*(48-51) + (58-60) - 10 = -18; Q(s, Wait) = 0.5*(-18 + 0.5*2) = -8.5 (max Q^null(s) stays 2)
+    # TurnOn: r+ = 2*(48-38) + 10 = 30; V^box(s, s) = max Q^box(s) = 1 + (2 - 2); Q = 0.5*1 + 0.5*(30 + 0.5) = 15.75
+    # (with m+ = Survival it would read V = 3 + (6 - 2) = 7: 17.25)
+    assert out.pseudo_reward == 30.0 and _get(core, sc, "TurnOn", s) == pytest.approx(15.75)
+
+
+def test_the_pseudo_state_can_be_none_activated(toy_raw, enc):
+    sc, core = _core(toy_raw, no_activated_motivation="none")
+    H = enc(sc, "H")  # no intention: no stimulus
+    p = core.perceive([5.0, 30.0], H)  # Serving 5, Survival 0 (30 < 50): m_dom 0
+    s = p.states
+    # praise -10: NAch 0, intensity 0; Survival 0: none activated, m+ = none (2)
+    none, survival = core.q.states(2, H), core.q.states(1, H)
+    _pseudo_setup(core, sc, H, s, none, extra=(("TurnOn", survival, 5.0), ("GoH", survival, 9.0)))
+    p_next = core.perceive([8.0, 32.0], H)
+    out = core.learn(p, sc.action_index("Wait"), (8.0, 32.0), -1, sc.action_index("TurnOn"), p_next, 0)
+    # Wait: r = 2*(5-8) + (30-32) - 10 = -18. TurnOn: r+ = 2*1*(5-0) + 10 = 20; V = 3 + (6 - 2) = 7;
+    # Q = 0.5*1 + 0.5*(20 + 0.5*7) = 12.25 (s+ = s would give 10.75, s+ with Survival 13.5)
+    assert out.reward == -18.0 and out.pseudo_reward == 20.0
+    assert _get(core, sc, "TurnOn", s) == pytest.approx(12.25)
+
+
+def test_the_pseudo_serving_drive_satisfied_and_the_pseudo_reward_without_the_bonus(toy_raw, enc):
+    for choices, want in ((dict(pseudo_serving="satisfied"), 2 * 45.0 + 10),  # NAch 45 -> 0: r+ = 2*1*45, + f
+                          (dict(pseudo_reward="eq_3_19"), 1 * 10.0 + 10)):  # Eq 3.19: no (1 + xi): 1*(45 - 35), + f
+        sc, core = _core(toy_raw, **choices)
+        X = enc(sc, "B", intention="on")
+        p = core.perceive([45.0, 58.0], X)
+        out = core.learn(p, sc.action_index("Wait"), (48.0, 60.0), -1, sc.action_index("TurnOn"),
+                         core.perceive([48.0, 60.0], X), 0)
+        assert out.pseudo_reward == want, choices
+    raw = toy_raw()
+    raw["drives"].reverse()  # NEng first: the serving drive NAch is drive 1
+    raw["open"]["pseudo_reward"] = "eq_3_19"
+    from homeo_decision.agent import DecisionCore
+    from homeo_decision.scenario import scenario_from_dict
+
+    sc = scenario_from_dict(raw)
+    core = DecisionCore(sc, 0)
+    X = enc(sc, "B", intention="on")
+    p = core.perceive([58.0, 45.0], X)  # Serving 65 > Survival 58: m_dom 1, the serving drive's
+    assert sc.serving == 1 and p.m_dom == 1
+    out = core.learn(p, sc.action_index("Wait"), (60.0, 48.0), -1, sc.action_index("TurnOn"),
+                     core.perceive([60.0, 48.0], X), 0)
+    assert out.pseudo_reward == 1 * 10.0 + 10  # Eq 3.19: no bonus on drive 1 either
+
+
+# -- metrics: the stages of a run and the excess below 1 (Eq 4.4) ------------------------------------------------
+def test_stage_marks_by_hand():
+    from homeo_sim.metrics import stage_marks
+
+    # every 10 up to 100, then every 100, each below n, and n itself
+    assert stage_marks(5) == (5,)
+    assert stage_marks(35) == (10, 20, 30, 35)
+    assert stage_marks(450) == (10, 20, 30, 40, 50, 60, 70, 80, 90, 100, 200, 300, 400, 450)
+
+
+def test_a_recorder_keeps_its_sums_at_each_mark():
+    rec = MetricRecorder(NAMES, THR, marks=(1, 2, 3))
+    for d, e, s in zip(DRIVES.tolist(), EXPRESSED, SATISFIED):
+        rec.record(d, e, s)
+    # after tick 1: sums 10, 60; tick 2: 30, 155; tick 3: 30, 195 (the excess of B: 10, 10 + 45, 55)
+    assert [st["n"] for st in rec.stages] == [1, 2, 3]
+    assert [st["sum"] for st in rec.stages] == [[10.0, 60.0], [30.0, 155.0], [30.0, 195.0]]
+    assert rec.stages[-1] == GOOD
+
+
+def test_an_excess_below_one_counts_and_integer_drives_make_floats():
+    rec = MetricRecorder(NAMES, THR, keep=True)
+    rec.record([1, 50], 0, 0)  # integers only
+    rec.record([0, 51], 0, 0)
+    assert rec.arrays()[0].dtype == np.float64  # the drives as floats, whatever numbers the caller gave
+    rec = MetricRecorder(NAMES, THR)
+    rec.record([0.0, 50.5], False, False)  # B 0.5 over its threshold 50: excess 0.5 (Eq 4.4), not 0
+    assert rec.summary()["CEDA"]["B"] == 0.5

@@ -62,6 +62,9 @@ EQUIVALENT: dict[str, str] = {
        for m in ("DriveDynamicsǁapply_action__mutmut_9", "DriveDynamicsǁapply_action__mutmut_14",
                  "DriveDynamicsǁapply_time__mutmut_11", "DriveDynamicsǁapply_time__mutmut_16",
                  "DriveModelǁset_body__mutmut_7", "DriveModelǁset_body__mutmut_12")},
+    # pseudo_serving = satisfied: the serving drive d <= 100 (Definition 1) moved by -100 or -101 clamps to 0 alike
+    "homeo_decision.agent.xǁDecisionCoreǁlearn__mutmut_60": "d - 101 clamps to 0 as d - 100 does, for any d <= 100",
+    "homeo_decision.agent.xǁDecisionCoreǁlearn__mutmut_78": "k = -2 is no drive's index, as k = -1: no bonus either",
     "homeo_decision.drives.xǁDriveDynamicsǁ__init____mutmut_10": "the drives outside the dynamics' subset are never read",
     "homeo_decision.drives.xǁDriveModelǁapply_time__mutmut_29": "no drive has index -2 either: none is skipped",
     # Eq 3.3's loop from index 0: intens[0] against itself as the top so far, > never holds, >= sets (0, intens[0])
@@ -81,6 +84,8 @@ EQUIVALENT: dict[str, str] = {
     **{f"homeo_intention.em.xǁEMDataǁ__init____mutmut_{n}": SAFE_PLAIN for n in (42, 43, 44, 47, 49, 51)},
     **{f"homeo_intention.em.x_em_step__mutmut_{n}": SAFE_GUARDED for n in (42, 47, 63, 74, 87)},
     "homeo_intention.em.xǁEMDataǁ__init____mutmut_99": "one more row of ones below the table, which no cell points at",
+    "homeo_sim.metrics.x_stage_marks__mutmut_11": "range(10, 102, 10) is range(10, 101, 10): 10, 20, ..., 100",
+    "homeo_sim.metrics.x_stage_marks__mutmut_21": "t = n (t <= n) is in the set already: | {n}",
     "homeo_sim.metrics.x_summarize__mutmut_28": "numpy's 0 / 0 is nan, as the guarded branch gives",
     "homeo_sim.human.xǁSimHumanǁadvance__mutmut_2": DRAW,  # u < p_leave
     "homeo_sim.human.xǁSimHumanǁadvance__mutmut_6": DRAW,  # u < p_return
