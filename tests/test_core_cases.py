@@ -763,3 +763,72 @@ def test_an_excess_below_one_counts_and_integer_drives_make_floats():
     rec = MetricRecorder(NAMES, THR)
     rec.record([0.0, 50.5], False, False)  # B 0.5 over its threshold 50: excess 0.5 (Eq 4.4), not 0
     assert rec.summary()["CEDA"]["B"] == 0.5
+
+
+def test_an_action_raising_a_drive_and_a_decaying_drive_stay_in_0_100(toy_raw, enc):
+    from homeo_decision.drives import DriveDynamics
+    from homeo_decision.scenario import scenario_from_dict
+
+    raw = toy_raw()
+    raw["drives"][1]["rate"] = -0.5  # NEng (body) decays 0.5 a tick (a rate may be negative)
+    raw["actions"][3]["effects"] = [{"set": {"robot.location": "B"}, "drives": {"NEng": 0.5}}]  # GoB raises it
+    sc = scenario_from_dict(raw)
+    body = DriveDynamics(sc, "body")
+    for start, after in ((99.75, 100.0), (100.0, 100.0), (99.0, 99.5)):  # Table 4.1 then clamp: 100.25 -> 100
+        body.values[1] = start
+        body.apply_action(enc(sc, "H"), sc.action_index("GoB"))
+        assert body.values[1] == after, start
+    for start, after in ((0.25, 0.0), (0.0, 0.0), (1.0, 0.5)):  # Table 4.2 then clamp: -0.25 -> 0
+        body.values[1] = start
+        body.apply_time()
+        assert body.values[1] == after, start
+
+
+def test_the_serving_drive_grows_by_default_as_on_a_tick_expressed_and_unsatisfied(toy_raw):
+    from homeo_decision.drives import DriveModel
+    from homeo_decision.scenario import scenario_from_dict
+
+    for growth in ("expressed", "unsatisfied"):
+        raw = toy_raw()
+        raw["open"]["serving_growth"] = growth
+        raw["open"]["initial_drives"] = {"NAch": 50.0, "NEng": 0.0}
+        m = DriveModel(scenario_from_dict(raw))
+        m.apply_time()  # the defaults: an intention expressed, not satisfied: NAch grows by its rate, 50 + 3
+        assert m.values[0] == 53.0, growth
+        m.apply_time(expressed=True, satisfied=True)  # satisfied: it grows only under 'expressed'
+        assert m.values[0] == (56.0 if growth == "expressed" else 53.0), growth
+
+
+# -- the simulated human (Algorithm 2): no reasonable intention, what it shows, a habit ending below 1 --------------
+def test_the_human_wants_nothing_where_no_intention_is_reasonable(toy, enc):
+    from homeo_sim.human import SimHuman
+
+    # toy: 'on' is reasonable while the box is off, 'come' while the human is far; P(no intention) = 0
+    h = SimHuman(toy, 0)
+    h.advance(enc(toy, "H", box="on"))  # box on, robot beside the human (near): none reasonable
+    assert h.intention == 0
+    h.advance(enc(toy, "H", box="off"))  # box off: 'on' (1) is the only reasonable one
+    assert h.intention == 1
+
+
+def test_what_the_human_shows_and_a_habit_that_sums_below_1(thesis, toy):
+    from homeo_decision.scenario import ScenarioError
+    from homeo_sim.human import SimHuman
+
+    h = SimHuman(thesis, 3)
+    assert set(h.observe()) == {"gesture", "movement", "keyword"}  # the intention's name only when asked for
+    assert set(h.observe(with_intention=True)) == {"gesture", "movement", "keyword", "intention"}
+    with refused(f"{toy.source}: the scenario has no 'observations' block: the simulated human cannot be observed"):
+        SimHuman(toy, 0).observe()
+    ch, symbols, _, cum = h._habits[0]
+    it = h.intention
+    # a cumulative habit ending at 0.9, not 1 (as rounding may leave it, only further): the first symbol 0.5, the
+    # second 0.2, those between nothing, the last what is left
+    row = [0.5] + [0.7] * (len(symbols) - 2) + [0.9]
+    h._habits = ((ch, symbols, 0.0, [row if i == it else c for i, c in enumerate(cum)]), *h._habits[1:])
+    n = 2000
+    seen = [h.observe()["gesture"] for _ in range(n)]
+    # inverse CDF: [0, 0.5) the first, [0.5, 0.7) the second, and every draw >= 0.7 stops at the last symbol
+    # (the draws in [0.9, 1) too, not past the end): shares 0.5, 0.2, 0.3
+    assert [seen.count(symbols[0]) / n, seen.count(symbols[1]) / n, seen.count(symbols[-1]) / n] == pytest.approx(
+        [0.5, 0.2, 0.3], abs=0.04)

@@ -65,6 +65,7 @@ EQUIVALENT: dict[str, str] = {
     # pseudo_serving = satisfied: the serving drive d <= 100 (Definition 1) moved by -100 or -101 clamps to 0 alike
     "homeo_decision.agent.xǁDecisionCoreǁlearn__mutmut_60": "d - 101 clamps to 0 as d - 100 does, for any d <= 100",
     "homeo_decision.agent.xǁDecisionCoreǁlearn__mutmut_78": "k = -2 is no drive's index, as k = -1: no bonus either",
+    "homeo_decision.drives.xǁDriveModelǁapply_feedback__mutmut_11": "feedback 0 returned earlier: >= 0 is > 0 for the rest",
     "homeo_decision.drives.xǁDriveDynamicsǁ__init____mutmut_10": "the drives outside the dynamics' subset are never read",
     "homeo_decision.drives.xǁDriveModelǁapply_time__mutmut_29": "no drive has index -2 either: none is skipped",
     # Eq 3.3's loop from index 0: intens[0] against itself as the top so far, > never holds, >= sets (0, intens[0])
@@ -92,6 +93,15 @@ EQUIVALENT: dict[str, str] = {
     "homeo_sim.human.xǁSimHumanǁadvance__mutmut_14": DRAW,  # random() < p_none
     "homeo_sim.human.xǁSimHumanǁproposal__mutmut_1": DRAW,  # random() >= p_propose
     "homeo_sim.human.xǁSimHumanǁobserve__mutmut_7": DRAW,  # u() < noise
+    "homeo_sim.human.xǁSimHumanǁobserve__mutmut_18": DRAW,  # x >= row[k]: a draw equal to a cumulative probability
+    # Outcome's last fields: satisfied defaults to False; true_intention False for 0 compares and indexes as 0
+    "homeo_sim.human.xǁSimHumanǁrespond__mutmut_13": "true_intention False for 0: False == 0 and indexes as 0 in every reader",
+    "homeo_sim.human.xǁSimHumanǁrespond__mutmut_14": "satisfied=False is Outcome's default",
+    "homeo_sim.human.xǁSimHumanǁrespond__mutmut_62": "satisfied=False is Outcome's default",
+    # stream_from's fallback for an exception without text: set_state wraps KeyError/TypeError/ValueError in a
+    # ValueError with its text, and numpy's OverflowError names the int: no exception reaching it has empty text
+    **{f"homeo_sim.human.x_stream_from__mutmut_{n}": "the type-name fallback of an exception with no text, which "
+       "no exception reaching it lacks" for n in (23, 26, 27)},
     "homeo_sim.metrics.xǁMetricRecorderǁrecord__mutmut_13": "x >= 0.0 for x > 0.0 adds x = 0 where it added 0",
     "homeo_sim.metrics.xǁMetricRecorderǁarrays__mutmut_16": "numpy's reshape takes any negative size as the unknown one",
     "homeo_sim.metrics.xǁMetricRecorderǁsummary__mutmut_22": 'float("NAN") is float("nan")',
