@@ -470,3 +470,365 @@ def test_a_drive_growing_always_is_never_still(toy_raw, enc):
     raw["open"]["drive_growth"] = {"NEng": "always"}
     sc = scenario_from_dict(raw)
     assert DriveDynamics(sc, "body").still(enc(sc, "H"), sc.action_index("GoB")) == ()
+
+
+# -- motivation (Eq 3.2-3.3, 3.27-3.28; Definition 1) ---------------------------------------------------------
+def test_a_drive_at_its_threshold_is_activated():
+    from homeo_decision.motivation import motivational_state
+
+    # Eq 3.2: intensity 0 only when d < at; NAch 30 at its threshold 30 is activated: 30 + stimulus 5 = 35;
+    # NEng 10 < 50 is not: 0
+    assert motivational_state([30.0, 10.0], [30.0, 50.0], [5.0, 0.0]) == ([35.0, 0.0], 0)
+
+
+def test_a_tie_goes_to_the_first_declared_by_default():
+    from homeo_decision.motivation import dominant, motivational_state
+
+    # Eq 3.3 with intensities 40 and 40 and no tie_break given: the first (index 0), not the last (1)
+    assert dominant([40.0, 40.0]) == 0
+    # both drives 40 over thresholds 0, no stimulus: intensities 40, 40; m_dom 0 by the default rule
+    assert motivational_state([40.0, 40.0], [0.0, 0.0], [0.0, 0.0]) == ([40.0, 40.0], 0)
+
+
+def test_the_none_state_is_taken_only_when_no_motivation_is_activated():
+    from homeo_decision.motivation import motivational_state
+
+    # open choice no_activated_motivation: any none_state >= 0 names the state of "none activated" (Definition 6).
+    # Drives 10 and 20 under thresholds 50: intensities 0, 0; the none state given is 0, so m_dom is 0, where
+    # Eq 3.3's argmax with ties to the last would give 1
+    assert motivational_state([10.0, 20.0], [50.0, 50.0], [0.0, 0.0], "last", 0) == ([0.0, 0.0], 0)
+    # an intensity of 0.5 (drive 0.5 over threshold 0) is activated, however small: m_dom 0, not the none state 1
+    assert motivational_state([0.5], [0.0], [0.0], "first", 1) == ([0.5], 0)
+
+
+def test_dod_weights_of_one_drive_and_a_dod_out_of_range():
+    from homeo_decision.motivation import dod_weights
+
+    # Eq 3.27-3.28 with |D| = 1: the weights sum to |D| = 1, so the one drive weighs 1 whatever the DoD
+    assert dod_weights(0.3, 1, 0) == [1.0]
+    with refused("DoD must be in [0, 1], got 1.5"):  # the refusal says what was given
+        dod_weights(1.5, 2, 0)
+
+
+def test_clamp_keeps_a_drive_inside_0_100_and_moves_nothing_else():
+    from homeo_decision.motivation import clamp
+
+    # Definition 1: -0.5 -> 0; 0.5 and 99.5 stay (inside, however close to a bound); 100.5 -> 100
+    assert [clamp(x) for x in (-0.5, 0.5, 99.5, 100.5)] == [0.0, 0.5, 99.5, 100.0]
+
+
+# -- Object Q-learning (Eq 3.11-3.17) -------------------------------------------------------------------------
+def test_a_tick_before_the_first_phase_has_the_first_phase():
+    from homeo_decision.objectq import Phase, phase_at
+
+    sched = (Phase(10, 0.3, 4.0), Phase(20, 0.1, 2.0))
+    # tick 5 precedes every start: the first phase; tick 10 starts it; tick 25 is past 20: the second
+    assert phase_at(sched, 5) is sched[0] and phase_at(sched, 10) is sched[0] and phase_at(sched, 25) is sched[1]
+
+
+def test_softmax_of_large_values_does_not_overflow():
+    from homeo_decision.objectq import softmax_pick, softmax_probs
+
+    # Eq 3.17 with Q = 1000 and 999 at tau 1: exp(1000) overflows a float, exp(Q - max) = exp(0), exp(-1) does not:
+    # P = 1 / (1 + e^-1) = e / (e + 1) = 0.731, 1 / (e + 1) = 0.269
+    e = math.e
+    assert softmax_probs([1000.0, 999.0], 1.0) == pytest.approx([e / (e + 1), 1 / (e + 1)])
+    # cumulative weights 1, 1 + 1/e = 1.368; u = 0.5 -> 0.684 < 1: the first action; u = 0.75 -> 1.026 >= 1: the second
+    assert softmax_pick([1000.0, 999.0], [7, 8], 1.0, 0.5) == 7 and softmax_pick([1000.0, 999.0], [7, 8], 1.0, 0.75) == 8
+
+
+def test_a_draw_at_the_top_of_the_range_picks_the_last_action():
+    from homeo_decision.objectq import softmax_pick
+
+    # equal values: cumulative weights 1, 2, 3; u = 1 (the closed end of a draw) -> 3, which no weight exceeds:
+    # the last action (6), not the second (5) nor past the end
+    assert softmax_pick([0.0, 0.0, 0.0], [4, 5, 6], 1.0, 1.0) == 6
+
+
+def test_an_initial_q_given_wins_over_the_scenario_s(toy):
+    from homeo_decision.objectq import ObjectQ
+
+    assert toy.open.initial_q == 0.0
+    q = ObjectQ(toy, initial_q=2.5)  # every entry of every table starts at the value given
+    assert q.initial_q == 2.5 and {v for t in q.q for row in t for v in row} == {2.5}
+
+
+def test_the_reduced_state_is_the_documented_number(toy, enc):
+    from homeo_decision.objectq import ObjectQ
+
+    q = ObjectQ(toy)
+    code = enc(toy, "B", intention="on", box="on")
+    # Eq 3.11-3.13: (m_dom * n_hum + hum) * n_states_o + object_state. Toy: S_hum = 3 intentions (none, on, come)
+    # x 3 relations (near, far, absent): n_hum 9; intention "on" 1, the human at H and the robot at B: far 1 ->
+    # hum = 1 * 3 + 1 = 4. box: distance (near, far) x status (off, on): 4 states; near 0, on 1 -> 0 * 2 + 1 = 1.
+    # null: 1 state (0). m_dom 1: box (1 * 9 + 4) * 4 + 1 = 53; null (1 * 9 + 4) * 1 + 0 = 13
+    assert q.states(1, code) == (53, 13)
+    assert q.states(0, code) == (4 * 4 + 1, 4)  # m_dom 0: (0 + 4) * 4 + 1 = 17; null 4
+
+
+def test_value_max_over_valid_subtracts_the_other_object_s_max(toy_raw, enc):
+    from homeo_decision.objectq import ObjectQ
+    from homeo_decision.scenario import scenario_from_dict
+
+    raw = toy_raw()
+    raw["open"]["value_max_over"] = "valid"
+    sc = scenario_from_dict(raw)
+    q = ObjectQ(sc)
+    A, H = enc(sc, "B"), enc(sc, "H")
+    s, s2 = q.states(0, A), q.states(0, H)  # the human's relation changes (far -> near): both objects' states change
+    box, null = 0, 1
+    turn_on, turn_off = q.act_local[sc.action_index("TurnOn")], q.act_local[sc.action_index("TurnOff")]
+    q.q[box][s2[box]][turn_on] = 100.0  # invalid at H
+    q.q[box][s2[box]][turn_off] = 1.0
+    q.q[null][s2[null]][q.act_local[sc.action_index("GoB")]] = 2.0
+    q.q[null][s[null]][q.act_local[sc.action_index("GoH")]] = 1.0
+    # Eq 3.15-3.16 over the valid actions: V = max_valid Q^box(s') = 1 + [max Q^null(s') = 2 - max Q^null(s) = 1] = 2
+    # Eq 3.14: Q <- 0.5 * 0 + 0.5 * (0 + 0.5 * 2) = 0.5
+    assert q.update(sc.action_index("TurnOff"), s, 0.0, s2, 0.5, 0.5, A, H) == pytest.approx(0.5)
+
+
+def test_value_max_over_valid_with_no_valid_action_takes_them_all(toy_raw, enc):
+    from homeo_decision.objectq import ObjectQ
+    from homeo_decision.scenario import scenario_from_dict
+
+    raw = toy_raw()
+    raw["open"]["value_max_over"] = "valid"
+    raw["actions"][1]["requires"] = {"box.distance": ["near"]}  # TurnOff too needs the box near: none valid at H
+    sc = scenario_from_dict(raw)
+    q = ObjectQ(sc)
+    A, H = enc(sc, "B"), enc(sc, "H")
+    assert q.valid_local[H][0] == ()
+    s, s2 = q.states(0, A), q.states(0, H)
+    q.q[0][s2[0]][q.act_local[sc.action_index("TurnOn")]] = 100.0
+    q.q[0][s2[0]][q.act_local[sc.action_index("TurnOff")]] = 1.0
+    q.q[1][s2[1]][q.act_local[sc.action_index("GoB")]] = 2.0
+    # no valid box action at H: the max over all of A_box, 100; V = 100 + [2 - 0] = 102
+    # Q <- 0.5 * 0 + 0.5 * (0 + 0.5 * 102) = 25.5
+    assert q.update(sc.action_index("TurnOff"), s, 0.0, s2, 0.5, 0.5, A, H) == pytest.approx(25.5)
+
+
+# -- Algorithm 1's open choices on the motivation factor and the pseudo update (Eq 3.20-3.21, 3.23) --------------
+def _core(toy_raw, **open_choices):
+    from homeo_decision.agent import DecisionCore
+    from homeo_decision.scenario import scenario_from_dict
+
+    raw = toy_raw()
+    raw["open"].update(open_choices)
+    sc = scenario_from_dict(raw)
+    return sc, DecisionCore(sc, 0)
+
+
+def _set(core, sc, name, states, value):
+    a = sc.action_index(name)
+    core.q.q[core.q.act_obj[a]][states[core.q.act_obj[a]]][core.q.act_local[a]] = value
+
+
+def _get(core, sc, name, states):
+    return core.q.value(sc.action_index(name), states)
+
+
+def test_the_motivation_bonus_goes_to_m_dom_or_only_to_an_activated_one(toy_raw, enc):
+    from homeo_decision.agent import Percept
+
+    sc, core = _core(toy_raw)  # the default, motivation_bonus = dominant: k = m_dom whatever its intensity
+    X = enc(sc, "B")
+    assert core.bonus_drive(Percept(X, (0.0, 58.0), [0.0, 58.0], 0, ())) == 0
+    sc, core = _core(toy_raw, motivation_bonus="activated")  # Definition 6: only while intensity(m_dom) > 0
+    assert core.bonus_drive(Percept(X, (0.0, 58.0), [0.0, 58.0], 0, ())) == -1  # intensity 0: no bonus (k = -1)
+    assert core.bonus_drive(Percept(X, (0.5, 0.0), [0.5, 0.0], 0, ())) == 0  # 0.5 > 0: activated, however little
+    assert core.bonus_drive(Percept(X, (0.0, 0.0), [0.0, 0.0], 2, ())) == -1  # m_dom 'none' (index 2): no drive
+
+
+def test_perception_takes_the_none_state_when_nothing_is_activated(toy_raw, enc):
+    sc, core = _core(toy_raw, no_activated_motivation="none")
+    # NAch 0 (threshold 0, no intention: no stimulus): intensity 0 + 0 = 0; NEng 10 < 50: 0. None activated:
+    # m_dom is 'none', the state after the 2 motivations: 2
+    p = core.perceive([0.0, 10.0], enc(sc, "H"))
+    assert (p.intensities, p.m_dom) == ([0.0, 0.0], 2)
+
+
+def test_the_default_seed_is_0(toy):
+    from homeo_decision.agent import DecisionCore
+
+    a, b = DecisionCore(toy), DecisionCore(toy, 0)
+    assert a.seed == 0 and [a.rng.random() for _ in range(3)] == [b.rng.random() for _ in range(3)]
+
+
+def _pseudo_setup(core, sc, X, s, s_dag, extra=()):
+    """Q(s, TurnOn) = 1, Q(s, GoH) = 2; Q(s+, TurnOn) = 3, Q(s+, GoH) = 6 (and what ``extra`` sets)."""
+    _set(core, sc, "TurnOn", s, 1.0)
+    _set(core, sc, "GoH", s, 2.0)
+    _set(core, sc, "TurnOn", s_dag, 3.0)
+    _set(core, sc, "GoH", s_dag, 6.0)
+    for name, states, v in extra:
+        _set(core, sc, name, states, v)
+
+
+def test_the_pseudo_update_with_max_over_valid_reads_both_worlds(toy_raw, enc):
+    # test_objectq.py's pseudo case with value_max_over = valid: at B every action is valid, so the same numbers
+    sc, core = _core(toy_raw, value_max_over="valid")
+    X = enc(sc, "B", intention="on")
+    p = core.perceive([45.0, 58.0], X)  # Serving 45 + 20 = 65 > Survival 58: m_dom 0
+    s, s_dag = p.states, core.q.states(1, X)  # praise -10: Serving 35 + 20 = 55 < 58: m+ = Survival (1)
+    _pseudo_setup(core, sc, X, s, s_dag)
+    p_next = core.perceive([48.0, 60.0], X)
+    out = core.learn(p, sc.action_index("Wait"), (48.0, 60.0), -1, sc.action_index("TurnOn"), p_next, 0)
+    # Wait: r = 2*(45-48) + (58-60) - 10 = -18; V = max_valid Q^null(s) = 2 + 0; Q = 0.5*0 + 0.5*(-18 + 0.5*2) = -8.5
+    assert out.reward == -18.0 and _get(core, sc, "Wait", s) == pytest.approx(-8.5)
+    # TurnOn: r+ = 2*1*(45-35) + 10 = 30; V = 3 + (6 - 2) = 7; Q = 0.5*1 + 0.5*(30 + 0.5*7) = 17.25
+    assert out.pseudo_reward == 30.0 and _get(core, sc, "TurnOn", s) == pytest.approx(17.25)
+
+
+def test_the_pseudo_state_breaks_a_tie_by_the_scenario_s_rule(toy_raw, enc):
+    sc, core = _core(toy_raw)  # tie_break first
+    X = enc(sc, "B", intention="on")
+    p = core.perceive([48.0, 58.0], X)  # Serving 48 + 20 = 68 > 58: m_dom 0
+    s, other = p.states, core.q.states(1, X)
+    # praise -10: Serving 38 + 20 = 58 = Survival 58, a tie: the first, Serving (0): s+ = s
+    _pseudo_setup(core, sc, X, s, other)
+    p_next = core.perceive([51.0, 60.0], X)
+    out = core.learn(p, sc.action_index("Wait"), (51.0, 60.0), -1, sc.action_index("TurnOn"), p_next, 0)
+    # Wait: r = 2*(48-51) + (58-60) - 10 = -18; Q(s, Wait) = 0.5*(-18 + 0.5*2) = -8.5 (max Q^null(s) stays 2)
+    # TurnOn: r+ = 2*(48-38) + 10 = 30; V^box(s, s) = max Q^box(s) = 1 + (2 - 2); Q = 0.5*1 + 0.5*(30 + 0.5) = 15.75
+    # (with m+ = Survival it would read V = 3 + (6 - 2) = 7: 17.25)
+    assert out.pseudo_reward == 30.0 and _get(core, sc, "TurnOn", s) == pytest.approx(15.75)
+
+
+def test_the_pseudo_state_can_be_none_activated(toy_raw, enc):
+    sc, core = _core(toy_raw, no_activated_motivation="none")
+    H = enc(sc, "H")  # no intention: no stimulus
+    p = core.perceive([5.0, 30.0], H)  # Serving 5, Survival 0 (30 < 50): m_dom 0
+    s = p.states
+    # praise -10: NAch 0, intensity 0; Survival 0: none activated, m+ = none (2)
+    none, survival = core.q.states(2, H), core.q.states(1, H)
+    _pseudo_setup(core, sc, H, s, none, extra=(("TurnOn", survival, 5.0), ("GoH", survival, 9.0)))
+    p_next = core.perceive([8.0, 32.0], H)
+    out = core.learn(p, sc.action_index("Wait"), (8.0, 32.0), -1, sc.action_index("TurnOn"), p_next, 0)
+    # Wait: r = 2*(5-8) + (30-32) - 10 = -18. TurnOn: r+ = 2*1*(5-0) + 10 = 20; V = 3 + (6 - 2) = 7;
+    # Q = 0.5*1 + 0.5*(20 + 0.5*7) = 12.25 (s+ = s would give 10.75, s+ with Survival 13.5)
+    assert out.reward == -18.0 and out.pseudo_reward == 20.0
+    assert _get(core, sc, "TurnOn", s) == pytest.approx(12.25)
+
+
+def test_the_pseudo_serving_drive_satisfied_and_the_pseudo_reward_without_the_bonus(toy_raw, enc):
+    for choices, want in ((dict(pseudo_serving="satisfied"), 2 * 45.0 + 10),  # NAch 45 -> 0: r+ = 2*1*45, + f
+                          (dict(pseudo_reward="eq_3_19"), 1 * 10.0 + 10)):  # Eq 3.19: no (1 + xi): 1*(45 - 35), + f
+        sc, core = _core(toy_raw, **choices)
+        X = enc(sc, "B", intention="on")
+        p = core.perceive([45.0, 58.0], X)
+        out = core.learn(p, sc.action_index("Wait"), (48.0, 60.0), -1, sc.action_index("TurnOn"),
+                         core.perceive([48.0, 60.0], X), 0)
+        assert out.pseudo_reward == want, choices
+    raw = toy_raw()
+    raw["drives"].reverse()  # NEng first: the serving drive NAch is drive 1
+    raw["open"]["pseudo_reward"] = "eq_3_19"
+    from homeo_decision.agent import DecisionCore
+    from homeo_decision.scenario import scenario_from_dict
+
+    sc = scenario_from_dict(raw)
+    core = DecisionCore(sc, 0)
+    X = enc(sc, "B", intention="on")
+    p = core.perceive([58.0, 45.0], X)  # Serving 65 > Survival 58: m_dom 1, the serving drive's
+    assert sc.serving == 1 and p.m_dom == 1
+    out = core.learn(p, sc.action_index("Wait"), (60.0, 48.0), -1, sc.action_index("TurnOn"),
+                     core.perceive([60.0, 48.0], X), 0)
+    assert out.pseudo_reward == 1 * 10.0 + 10  # Eq 3.19: no bonus on drive 1 either
+
+
+# -- metrics: the stages of a run and the excess below 1 (Eq 4.4) ------------------------------------------------
+def test_stage_marks_by_hand():
+    from homeo_sim.metrics import stage_marks
+
+    # every 10 up to 100, then every 100, each below n, and n itself
+    assert stage_marks(5) == (5,)
+    assert stage_marks(35) == (10, 20, 30, 35)
+    assert stage_marks(450) == (10, 20, 30, 40, 50, 60, 70, 80, 90, 100, 200, 300, 400, 450)
+
+
+def test_a_recorder_keeps_its_sums_at_each_mark():
+    rec = MetricRecorder(NAMES, THR, marks=(1, 2, 3))
+    for d, e, s in zip(DRIVES.tolist(), EXPRESSED, SATISFIED):
+        rec.record(d, e, s)
+    # after tick 1: sums 10, 60; tick 2: 30, 155; tick 3: 30, 195 (the excess of B: 10, 10 + 45, 55)
+    assert [st["n"] for st in rec.stages] == [1, 2, 3]
+    assert [st["sum"] for st in rec.stages] == [[10.0, 60.0], [30.0, 155.0], [30.0, 195.0]]
+    assert rec.stages[-1] == GOOD
+
+
+def test_an_excess_below_one_counts_and_integer_drives_make_floats():
+    rec = MetricRecorder(NAMES, THR, keep=True)
+    rec.record([1, 50], 0, 0)  # integers only
+    rec.record([0, 51], 0, 0)
+    assert rec.arrays()[0].dtype == np.float64  # the drives as floats, whatever numbers the caller gave
+    rec = MetricRecorder(NAMES, THR)
+    rec.record([0.0, 50.5], False, False)  # B 0.5 over its threshold 50: excess 0.5 (Eq 4.4), not 0
+    assert rec.summary()["CEDA"]["B"] == 0.5
+
+
+def test_an_action_raising_a_drive_and_a_decaying_drive_stay_in_0_100(toy_raw, enc):
+    from homeo_decision.drives import DriveDynamics
+    from homeo_decision.scenario import scenario_from_dict
+
+    raw = toy_raw()
+    raw["drives"][1]["rate"] = -0.5  # NEng (body) decays 0.5 a tick (a rate may be negative)
+    raw["actions"][3]["effects"] = [{"set": {"robot.location": "B"}, "drives": {"NEng": 0.5}}]  # GoB raises it
+    sc = scenario_from_dict(raw)
+    body = DriveDynamics(sc, "body")
+    for start, after in ((99.75, 100.0), (100.0, 100.0), (99.0, 99.5)):  # Table 4.1 then clamp: 100.25 -> 100
+        body.values[1] = start
+        body.apply_action(enc(sc, "H"), sc.action_index("GoB"))
+        assert body.values[1] == after, start
+    for start, after in ((0.25, 0.0), (0.0, 0.0), (1.0, 0.5)):  # Table 4.2 then clamp: -0.25 -> 0
+        body.values[1] = start
+        body.apply_time()
+        assert body.values[1] == after, start
+
+
+def test_the_serving_drive_grows_by_default_as_on_a_tick_expressed_and_unsatisfied(toy_raw):
+    from homeo_decision.drives import DriveModel
+    from homeo_decision.scenario import scenario_from_dict
+
+    for growth in ("expressed", "unsatisfied"):
+        raw = toy_raw()
+        raw["open"]["serving_growth"] = growth
+        raw["open"]["initial_drives"] = {"NAch": 50.0, "NEng": 0.0}
+        m = DriveModel(scenario_from_dict(raw))
+        m.apply_time()  # the defaults: an intention expressed, not satisfied: NAch grows by its rate, 50 + 3
+        assert m.values[0] == 53.0, growth
+        m.apply_time(expressed=True, satisfied=True)  # satisfied: it grows only under 'expressed'
+        assert m.values[0] == (56.0 if growth == "expressed" else 53.0), growth
+
+
+# -- the simulated human (Algorithm 2): no reasonable intention, what it shows, a habit ending below 1 --------------
+def test_the_human_wants_nothing_where_no_intention_is_reasonable(toy, enc):
+    from homeo_sim.human import SimHuman
+
+    # toy: 'on' is reasonable while the box is off, 'come' while the human is far; P(no intention) = 0
+    h = SimHuman(toy, 0)
+    h.advance(enc(toy, "H", box="on"))  # box on, robot beside the human (near): none reasonable
+    assert h.intention == 0
+    h.advance(enc(toy, "H", box="off"))  # box off: 'on' (1) is the only reasonable one
+    assert h.intention == 1
+
+
+def test_what_the_human_shows_and_a_habit_that_sums_below_1(thesis, toy):
+    from homeo_decision.scenario import ScenarioError
+    from homeo_sim.human import SimHuman
+
+    h = SimHuman(thesis, 3)
+    assert set(h.observe()) == {"gesture", "movement", "keyword"}  # the intention's name only when asked for
+    assert set(h.observe(with_intention=True)) == {"gesture", "movement", "keyword", "intention"}
+    with refused(f"{toy.source}: the scenario has no 'observations' block: the simulated human cannot be observed"):
+        SimHuman(toy, 0).observe()
+    ch, symbols, _, cum = h._habits[0]
+    it = h.intention
+    # a cumulative habit ending at 0.9, not 1 (as rounding may leave it, only further): the first symbol 0.5, the
+    # second 0.2, those between nothing, the last what is left
+    row = [0.5] + [0.7] * (len(symbols) - 2) + [0.9]
+    h._habits = ((ch, symbols, 0.0, [row if i == it else c for i, c in enumerate(cum)]), *h._habits[1:])
+    n = 2000
+    seen = [h.observe()["gesture"] for _ in range(n)]
+    # inverse CDF: [0, 0.5) the first, [0.5, 0.7) the second, and every draw >= 0.7 stops at the last symbol
+    # (the draws in [0.9, 1) too, not past the end): shares 0.5, 0.2, 0.3
+    assert [seen.count(symbols[0]) / n, seen.count(symbols[1]) / n, seen.count(symbols[-1]) / n] == pytest.approx(
+        [0.5, 0.2, 0.3], abs=0.04)

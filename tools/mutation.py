@@ -27,6 +27,7 @@ OUT = ROOT / "out" / "mutation"
 
 SIM = ["test_sim_world_human.py", "test_energy_readings.py", "test_fidelity.py", "test_scenario.py"]
 DECISION = ["test_objectq.py", "test_reward.py", "test_baselines.py", "test_determinism.py"]
+INTENTION = ["test_intention_core.py", "test_intention_cases.py"]  # the hand-computed cases of Section 2.3
 MODULES = {  # module -> its source file and the fast ROS-free tests of it (with tests/test_core_cases.py: the
     # cases written by hand for its survivors); mutmut runs, for each mutant, those of them that call it
     "reward": ("src/homeo_decision/reward.py", DECISION),
@@ -35,8 +36,8 @@ MODULES = {  # module -> its source file and the fast ROS-free tests of it (with
     "drives": ("src/homeo_decision/drives.py", ["test_motivation.py", *SIM]),
     "agent": ("src/homeo_decision/agent.py", DECISION),
     "metrics": ("src/homeo_sim/metrics.py", ["test_metrics.py", "test_sim_world_human.py"]),
-    "intention_model": ("src/homeo_intention/model.py", ["test_intention_core.py"]),
-    "intention_em": ("src/homeo_intention/em.py", ["test_intention_core.py"]),
+    "intention_model": ("src/homeo_intention/model.py", INTENTION),
+    "intention_em": ("src/homeo_intention/em.py", INTENTION),
     "world": ("src/homeo_sim/world.py", SIM),
     "body": ("src/homeo_sim/body.py", SIM),
     "human": ("src/homeo_sim/human.py", SIM),
@@ -46,6 +47,9 @@ MODULES = {  # module -> its source file and the fast ROS-free tests of it (with
 DRAW = ("a uniform draw on [0, 1) compared with a probability: < and <= (>= and >) differ only when the draw equals "
         "it exactly, one 53-bit float in 2^53; no seed of a test reaches it")
 CACHE = "the phase cache's span: the same phase is found again for each of its ticks"
+SAFE_GUARDED = ("EM's guarded division where the plain one was: the same quotient wherever a total is > 0, and no "
+                "total is 0 where the plain one was taken")
+SAFE_PLAIN = "EM's plain division where the guarded one was, only with strength > 0: every total is then >= strength > 0"
 EQUIVALENT: dict[str, str] = {
     # DecisionCore.phase caches the phase of a span of ticks; these change only when it is looked up again
     # (phase_at gives the same phase for every tick of the span), or an empty span the first lookup fills
@@ -58,14 +62,46 @@ EQUIVALENT: dict[str, str] = {
        for m in ("DriveDynamicsǁapply_action__mutmut_9", "DriveDynamicsǁapply_action__mutmut_14",
                  "DriveDynamicsǁapply_time__mutmut_11", "DriveDynamicsǁapply_time__mutmut_16",
                  "DriveModelǁset_body__mutmut_7", "DriveModelǁset_body__mutmut_12")},
+    # pseudo_serving = satisfied: the serving drive d <= 100 (Definition 1) moved by -100 or -101 clamps to 0 alike
+    "homeo_decision.agent.xǁDecisionCoreǁlearn__mutmut_60": "d - 101 clamps to 0 as d - 100 does, for any d <= 100",
+    "homeo_decision.agent.xǁDecisionCoreǁlearn__mutmut_78": "k = -2 is no drive's index, as k = -1: no bonus either",
+    "homeo_decision.drives.xǁDriveModelǁapply_feedback__mutmut_11": "feedback 0 returned earlier: >= 0 is > 0 for the rest",
     "homeo_decision.drives.xǁDriveDynamicsǁ__init____mutmut_10": "the drives outside the dynamics' subset are never read",
     "homeo_decision.drives.xǁDriveModelǁapply_time__mutmut_29": "no drive has index -2 either: none is skipped",
+    # Eq 3.3's loop from index 0: intens[0] against itself as the top so far, > never holds, >= sets (0, intens[0])
+    # again, and a NaN compares false either way
+    "homeo_decision.motivation.x_dominant__mutmut_12": "argmax from index 0: intens[0] > itself never holds",
+    "homeo_decision.motivation.x_dominant__mutmut_19": "argmax from index 0: intens[0] >= itself sets best 0 again",
+    "homeo_decision.motivation.x_clamp__mutmut_4": "x = 0 gives 0.0 for x: the bound's own value (-0.0 == 0.0)",
+    "homeo_decision.motivation.x_clamp__mutmut_9": "x = 100 gives 100.0 for x: the bound's own value",
+    # the loader gives every prior as a tuple of Python floats (scenario/load.py's dist): a float64 array either way
+    **{f"homeo_intention.model.x_prior_params__mutmut_{n}": "the priors as numpy takes them: floats make a float array "
+       "with or without dtype=float" for n in (7, 9, 11, 13)},
+    # em.py's `safe` only picks x / tot over np.divide(..., where=tot > 0), which divides the same wherever tot > 0:
+    # a mutant that picks the guarded division more often computes the same; one that picks the plain one more
+    # often does so only with strength > 0, where every total is >= strength > 0 for priors that are distributions
+    # (P(I) sums to 1: sum y >= strength K; rho: n_k + strength; a channel's pseudo counts sum to strength)
+    **{f"homeo_intention.em.xǁEMDataǁ__init____mutmut_{n}": SAFE_GUARDED for n in (41, 45, 46, 48, 50, 52)},
+    **{f"homeo_intention.em.xǁEMDataǁ__init____mutmut_{n}": SAFE_PLAIN for n in (42, 43, 44, 47, 49, 51)},
+    **{f"homeo_intention.em.x_em_step__mutmut_{n}": SAFE_GUARDED for n in (42, 47, 63, 74, 87)},
+    "homeo_intention.em.xǁEMDataǁ__init____mutmut_99": "one more row of ones below the table, which no cell points at",
+    "homeo_sim.metrics.x_stage_marks__mutmut_11": "range(10, 102, 10) is range(10, 101, 10): 10, 20, ..., 100",
+    "homeo_sim.metrics.x_stage_marks__mutmut_21": "t = n (t <= n) is in the set already: | {n}",
     "homeo_sim.metrics.x_summarize__mutmut_28": "numpy's 0 / 0 is nan, as the guarded branch gives",
     "homeo_sim.human.xǁSimHumanǁadvance__mutmut_2": DRAW,  # u < p_leave
     "homeo_sim.human.xǁSimHumanǁadvance__mutmut_6": DRAW,  # u < p_return
     "homeo_sim.human.xǁSimHumanǁadvance__mutmut_14": DRAW,  # random() < p_none
     "homeo_sim.human.xǁSimHumanǁproposal__mutmut_1": DRAW,  # random() >= p_propose
     "homeo_sim.human.xǁSimHumanǁobserve__mutmut_7": DRAW,  # u() < noise
+    "homeo_sim.human.xǁSimHumanǁobserve__mutmut_18": DRAW,  # x >= row[k]: a draw equal to a cumulative probability
+    # Outcome's last fields: satisfied defaults to False; true_intention False for 0 compares and indexes as 0
+    "homeo_sim.human.xǁSimHumanǁrespond__mutmut_13": "true_intention False for 0: False == 0 and indexes as 0 in every reader",
+    "homeo_sim.human.xǁSimHumanǁrespond__mutmut_14": "satisfied=False is Outcome's default",
+    "homeo_sim.human.xǁSimHumanǁrespond__mutmut_62": "satisfied=False is Outcome's default",
+    # stream_from's fallback for an exception without text: set_state wraps KeyError/TypeError/ValueError in a
+    # ValueError with its text, and numpy's OverflowError names the int: no exception reaching it has empty text
+    **{f"homeo_sim.human.x_stream_from__mutmut_{n}": "the type-name fallback of an exception with no text, which "
+       "no exception reaching it lacks" for n in (23, 26, 27)},
     "homeo_sim.metrics.xǁMetricRecorderǁrecord__mutmut_13": "x >= 0.0 for x > 0.0 adds x = 0 where it added 0",
     "homeo_sim.metrics.xǁMetricRecorderǁarrays__mutmut_16": "numpy's reshape takes any negative size as the unknown one",
     "homeo_sim.metrics.xǁMetricRecorderǁsummary__mutmut_22": 'float("NAN") is float("nan")',
@@ -84,12 +120,19 @@ EQUIVALENT: dict[str, str] = {
 
 
 def _mutmut_config(source: str, tests: list) -> str:
-    tests = ", ".join(json.dumps(str(ROOT / "tests" / t)) for t in [*tests, "test_core_cases.py"])
+    """mutmut runs pytest in ``mutants/``, on its copy of tests/ (with the mutated src/ first on the path), with
+    ``--rootdir=.``: the tests are selected there too (``tests/...``, the copies) and the repository's pytest
+    settings read with ``-c``. A selection of the repository's own tests/ (or its rootdir) would import each test
+    module from there first, and every mutant's run would then stop at pytest's "import file mismatch" with
+    the copy, a failure mutmut counts as a kill; and a test written since the last run would be named by a
+    path that does not exist from ``mutants/``, the same false kill."""
+    tests = ", ".join(json.dumps(f"tests/{t}") for t in [*tests, "test_core_cases.py"])
     return ("[tool.mutmut]\n"
             'source_paths = ["src"]\n'
+            'also_copy = ["docs"]\n'  # a test reads docs/ beside its tests/ (test_fidelity: FIDELITY.md)
             f"only_mutate = [{json.dumps(source)}]\n"
             f"pytest_add_cli_args_test_selection = [{tests}]\n"
-            f'pytest_add_cli_args = ["-p", "no:xdist", "-p", "no:cacheprovider", "--rootdir", {json.dumps(str(ROOT))}]\n')
+            f'pytest_add_cli_args = ["-p", "no:xdist", "-p", "no:cacheprovider", "-c", {json.dumps(str(ROOT / "pyproject.toml"))}]\n')
 
 
 def _fresh_copy(work: Path, source: str) -> None:
@@ -106,7 +149,7 @@ def run_module(name: str, jobs: int, budget: float) -> dict:
     work = OUT / name
     work.mkdir(parents=True, exist_ok=True)
     (work / "pyproject.toml").write_text(_mutmut_config(source, tests))
-    for d in ("src", "tests"):  # mutmut names tests by their path from here when it finds new ones
+    for d in ("src", "tests", "docs"):  # what mutmut copies into mutants/ (also_copy)
         if not (work / d).exists():
             (work / d).symlink_to(ROOT / d)
     _fresh_copy(work, source)
