@@ -11,6 +11,7 @@ import pytest
 
 from homeo_decision.scenario import scenario_from_dict
 from homeo_intention import IntentionModel, IntentionModelError
+from test_intention_core import toy_observations  # the same toy CPDs
 
 
 def refused(message: str, error=ValueError):
@@ -21,20 +22,11 @@ def refused(message: str, error=ValueError):
 @pytest.fixture
 def sc(toy_raw):
     """The toy scenario (conftest.py: intentions none, on, come) with observations whose CPDs are easy to multiply:
-    P(I) = 0.5, 0.3, 0.2; P(gesture | I) and P(keyword | I) as below (the unlisted symbol takes the rest); movement
+    P(I) = 0.5, 0.3, 0.2; P(gesture | I) and P(keyword | I) as test_intention_core.toy_observations gives them (the
+    unlisted symbol takes the rest); movement
     has no prior given: 1/3 for each of its symbols."""
     raw = toy_raw()
-    raw["observations"] = {
-        "gesture": ["none", "point", "beckon"],
-        "movement": ["still", "approaching", "leaving"],
-        "keyword": ["none", "on", "come"],
-        "prior": {
-            "intention": {"none": 0.5, "on": 0.3, "come": 0.2},
-            "none": {"gesture": {"none": 0.8, "point": 0.1, "beckon": 0.1}, "keyword": {"none": 0.9, "on": 0.05}},
-            "on": {"gesture": {"none": 0.2, "point": 0.7, "beckon": 0.1}, "keyword": {"none": 0.2, "on": 0.7}},
-            "come": {"gesture": {"none": 0.3, "point": 0.1, "beckon": 0.6}, "keyword": {"none": 0.3, "on": 0.1}},
-        },
-    }
+    raw["observations"] = {k: v for k, v in toy_observations().items() if k != "habits"}  # the model needs no habits
     return scenario_from_dict(raw)
 
 
