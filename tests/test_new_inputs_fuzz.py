@@ -589,3 +589,33 @@ def test_a_node_given_a_params_file_rcl_refuses_says_so_in_one_line_exit_2(tmp_p
                        capture_output=True, text=True, timeout=60)
     assert r.returncode == 2, r.stderr
     assert r.stderr.count("\n") == 1 and r.stderr.startswith("error: Couldn't parse params file"), r.stderr
+
+
+@FAST
+@given(value=SCALARS | st.sampled_from(["events", "single", "Events", " single", "events\n"]))
+def test_the_executor_is_events_or_single_or_refused_in_one_line(value):
+    """The executor parameter (issue 29), from a parameter file or a launch argument (checked) or the command
+    line (parsed): one of its two names, as given, or a ValueError of one line."""
+    from homeo_msgs_py.node_base import EXECUTOR
+
+    for take in ((EXECUTOR.check,) + ((EXECUTOR.parse,) if isinstance(value, str) else ())):
+        try:
+            got = take(value)
+        except ValueError as exc:
+            assert value not in ("events", "single") and str(exc).count("\n") == 0, exc
+        else:
+            assert got == value and got in ("events", "single"), got
+
+
+@FAST
+@given(value=st.text(max_size=10) | st.sampled_from(["events", "single"]))
+def test_the_launcher_s_executor_flag_parses_or_is_one_line(value):
+    from homeo_launch.cli import build_parser
+    from homeo_msgs_py.cli_args import UserError
+
+    try:
+        a = build_parser().parse_args(["sim", "--executor", value])
+    except UserError as exc:
+        assert value not in ("events", "single") and "\n" not in str(exc), exc
+    else:
+        assert a.executor == value in ("events", "single")

@@ -23,6 +23,7 @@ from homeo_msgs_py.graph import INTENTION_MODES, NODES, WORLD
 from homeo_msgs_py.learning import LEARNING
 from homeo_msgs_py.params import ParamSpec
 from homeo_msgs_py.schemas import validate
+from homeo_msgs_py.text import one_line
 
 from . import codec
 from .world_api import WORLD_PARAMS, WorldBackend, WorldConfigError, world_class
@@ -50,7 +51,7 @@ def check_world(world, scenario=None, **params) -> list[str]:
         cls = world_class(world)
         sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     except (WorldConfigError, ScenarioError) as exc:
-        return [str(exc)]
+        return [one_line(str(exc))]
     failures = _declaration(cls, world)
     try:
         values = _values(cls, params)
@@ -58,16 +59,23 @@ def check_world(world, scenario=None, **params) -> list[str]:
         with _Worlds(cls, sc, values) as ws:  # a world that cannot be built with these values: said once
             ws.make(0)
     except Exception as exc:  # noqa: BLE001 - a parameter refused, a WorldConfigError, whatever the world raises
-        return failures + [f"{type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}"
-                           if not isinstance(exc, ValueError) else str(exc)]
+        return failures + [_reason(exc, typed=not isinstance(exc, ValueError))]
     for check in (_contract, _seeding, _state, _link):
         try:
             check(cls, sc, values)
         except Failure as exc:
-            failures.append(f"{check.__name__[1:]}: {exc}")
+            failures.append(f"{check.__name__[1:]}: {_reason(exc, typed=False)}")
         except Exception as exc:  # noqa: BLE001 - whatever a world raises is a failure to report, not a crash
-            failures.append(f"{check.__name__[1:]}: {type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}")
+            failures.append(f"{check.__name__[1:]}: {_reason(exc)}")
     return failures
+
+
+def _reason(exc: BaseException, typed: bool = True) -> str:
+    """An exception as one line of the checker's list: its text with any line break escaped (it may quote a
+    value the user gave), or, ``typed``, its type and the first line of its text (whatever a world raises)."""
+    if not typed:
+        return one_line(str(exc))
+    return f"{type(exc).__name__}: {one_line(str(exc).splitlines()[0]) if str(exc) else ''}"
 
 
 def _declaration(cls, name) -> list[str]:
@@ -299,4 +307,11 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    import sys
+
+    from homeo_msgs_py.cli_args import leave
+
+    code = main()
+    if "qi" in sys.modules:  # a Pepper's check ran a libqi session on loopback: its teardown may abort
+        leave(code)
+    raise SystemExit(code)

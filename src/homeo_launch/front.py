@@ -22,7 +22,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from homeo_decision.world_api import ITERATIONS, RATE, WorldConfigError, world_class
-from homeo_msgs_py.cli_args import setting, user_path
+from homeo_msgs_py.cli_args import leave, setting, user_path
 from homeo_msgs_py.graph import BAYES
 from homeo_msgs_py.learning import DOD, PSEUDO_UPDATE, XI, add_learning_flags, add_no_pseudo_flag, learning_values
 from homeo_msgs_py.params import add_flag
@@ -74,9 +74,8 @@ def cmd_world(a) -> int:
             plan = cls.plan(sc, given, str(base))
         except WorldConfigError as exc:
             if getattr(exc, "hard_exit", False):  # e.g. libqi's threads may abort the interpreter's teardown
-                print(f"{PROG}: error: {exc}", file=sys.stderr, flush=True)
-                sys.stdout.flush()
-                os._exit(2)
+                print(f"{PROG}: error: {exc}", file=sys.stderr)
+                leave(2)
             raise
         o = graph_options(a, cls, sc, plan, durable)
         setting_ = {"seed": a.seed, "iterations": a.iterations, "intention": o.intention, "learning": o.learning,

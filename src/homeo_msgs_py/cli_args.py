@@ -85,6 +85,17 @@ def run_command(prog: str, command, user_errors: tuple = (), failures: tuple = (
         return 130
 
 
+def leave(code: int):
+    """End the process with ``code`` at once, its output flushed: for a program that ran a libqi session, whose
+    threads and static objects can abort (SIGABRT) the interpreter's teardown and turn a clean exit into -6."""
+    import os
+    import sys
+
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
+
+
 def die_with_parent() -> None:
     """Nodes (and companions) started by the launcher end if it is killed outright (no orphans)."""
     import os

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import argparse
 import collections
-import os
 import signal
 import sys
 import threading
@@ -22,7 +21,7 @@ from typing import Any
 import qi
 
 from homeo_decision.rng import component_rng
-from homeo_msgs_py.cli_args import die_with_parent
+from homeo_msgs_py.cli_args import die_with_parent, leave
 
 from . import naoqi_link
 from .config import AUTO_NAOQI, PepperConfig, load_config
@@ -347,11 +346,7 @@ def main(argv=None) -> int:
         pass
     finally:
         robot.close()
-    # libqi's threads and static objects can abort (SIGABRT) during interpreter teardown, which
-    # would turn a clean stop into exit code -6: the session is closed, so leave at once
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(0)
+    leave(0)  # the session is closed: libqi's teardown must not turn the clean stop into -6
 
 
 if __name__ == "__main__":

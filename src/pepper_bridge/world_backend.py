@@ -278,10 +278,13 @@ class PepperWorld(WorldBackend):
     def test_double(cls, sc, values: dict):
         """A stand-in Pepper over a real libqi session on loopback, time frozen, with the field test's
         scripted user; it drops its link on request (``StandinRobot.drop_for``)."""
+        import qi
+
         from .config import load_config
         from .standin import StandinRobot
         from .user import load_script
 
+        qi.logging.setLevel(qi.logging.ERROR)  # libqi logs to stdout: a checker's or a test's output stays its own
         robot = StandinRobot(load_config(values["config"] or None, scenario=sc), load_script("field_user.json"),
                              seed=values["seed"], time_scale=0.0, scenario=sc)
         try:
