@@ -50,4 +50,7 @@ def main(bag: str) -> None:
 if __name__ == "__main__":
     if len(sys.argv) != 2:
         sys.exit("usage: tools/decode_bench.py BAG_DIR")
-    main(sys.argv[1])
+    try:
+        main(sys.argv[1])
+    except Exception as exc:  # noqa: BLE001 - not a bag rosbags can read (rosbags' own error), or no homeo message
+        sys.exit(f"decode_bench: {sys.argv[1]}: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}")
