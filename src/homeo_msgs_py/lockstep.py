@@ -330,11 +330,6 @@ class LockstepDriver:
             self._outcome = (outcome[0], outcome[1])
         self._observe()
 
-    @property
-    def last_action(self) -> dict | None:
-        """The fields of the last action message taken (the one being performed during a step)."""
-        return self._last_fields
-
     def set_rate(self, rate: float) -> None:
         self.rate = rate
         self._t0, self._t0_tick = self.clock(), self.tick

@@ -58,6 +58,10 @@ class GatedPublisher:
     def matched(self) -> int:
         return self.pub.get_subscription_count()
 
+    def wanted(self) -> bool:
+        """Whether a message would go anywhere: a lazy event with no listener and no recording goes nowhere."""
+        return not self.lazy or self.node.spool is not None or self.pub.get_subscription_count() > 0
+
     def publish(self, text: str) -> None:
         if not self.open and self.matched() >= self.min_subs:
             self.open = True
@@ -218,6 +222,8 @@ class HomeoNode(Node):
         return GatedPublisher(self, key, min_readers(key) + self.extra_readers)
 
     def send(self, pub: GatedPublisher, tick: int, fields: dict, run: int = 0) -> None:
+        if not pub.wanted():  # the outcome each tick, with nobody listening: neither encoded nor signed
+            return
         text = encode(pub.schema, tick, fields, run=run)
         if self.signer is not None and pub.key in SIGNED:
             text = self.signer.sign(text)
